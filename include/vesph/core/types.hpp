@@ -1,0 +1,33 @@
+#pragma once
+// Basic types shared by the whole library. Units are SI everywhere.
+#include <Eigen/Core>
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+
+namespace vesph {
+
+using Index = std::uint32_t;
+
+template <int D>
+using Vec = Eigen::Matrix<double, D, 1>;
+
+// Particle kinds as written to the output (`kind` dataset, DESIGN.md "Output").
+enum class ParticleKind : std::uint8_t {
+  fluid = 0,   // moving particles, part of the ODE state
+  wall = 1,    // fixed wall particles in contact with the fluid
+  dummy = 2,   // fixed dummy/image layers behind the wall
+  inflow = 3,  // inflow buffer particles (prescribed motion)
+};
+
+// Invalid user input (scene, command line). Exit code 2.
+struct InputError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+// NaN/Inf, blow-up, or a failed solve during a run. Exit code 3.
+struct NumericalFailure : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+}  // namespace vesph

@@ -1,0 +1,127 @@
+#pragma once
+// The effect interface (DESIGN.md "Effects"): one physics effect per file, composed by the
+// scene. An effect declares the fields it needs at setup and adds its contribution to the
+// time derivatives. It never loops over neighbours itself: the pair driver
+// (vesph/physics/pair_driver.hpp) owns the neighbour loop and the threading, and hands each
+// pair effect the neighbours of one particle with the kernel already evaluated.
+//
+// The right-hand side runs in phases; a phase with no effect in it costs nothing:
+//   state      per particle: fields that follow from the state (pressure from density)
+//   (walls)    boundary values on fixed particles (vesph/boundary)
+//   gradients  pair pass: velocity gradients, number density, ...
+//   rates      per particle: constitutive stress rates
+//   forces     pair pass: continuity, pressure gradient, viscous and stress terms
+//   external   per particle: body forces
+#include <span>
+#include <string>
+#include <string_view>
+
+#include "vesph/core/kernel.hpp"
+#include "vesph/core/neighbours.hpp"
+#include "vesph/core/particles.hpp"
+
+namespace vesph {
+
+enum class Phase { state, gradients, rates, forces, external };
+
+// One neighbour j of particle i, with the pair geometry evaluated once per pass:
+// rij = xi - xj (minimum image), r = |rij|, W = W(r,h), F = (dW/dr)/r, so that the kernel
+// gradient with respect to xi is grad_i W_ij = F * rij.
+template <int D>
+struct Neighbour {
+  Vec<D> rij;
+  double r;
+  double W;
+  double F;
+  Index j;
+};
+
+// Everything an effect may read or write during one right-hand-side evaluation.
+// Derivative arrays cover the moving particles only (the ODE state).
+template <int D>
+struct RhsContext {
+  ParticleSet<D>& particles;
+  const Kernel& kernel;
+  const Domain<D>& domain;
+  double time;
+  double* dxdt;    // [n_moving * D]
+  double* drhodt;  // [n_moving]
+  double* dvdt;    // [n_moving * D]
+};
+
+// The pressure closure of the scheme (WCSPH: the equation of state). Walls use its
+// inverse to give their particles the density that matches the extrapolated pressure.
+struct PressureModel {
+  virtual ~PressureModel() = default;
+  virtual double pressure(double rho) const = 0;
+  virtual double densityFor(double p) const = 0;
+  virtual double soundSpeed() const = 0;
+  // Relative density variation the sound speed was chosen for (delta of thesis eq. 3.38).
+  virtual double designDensityVariation() const = 0;
+};
+
+// What effects tell the integrators about explicit stability (Fang eqs. 51-53, thesis 3.5).
+struct StabilityInputs {
+  double sound_speed = 0;          // max over particles, m/s
+  double kinematic_viscosity = 0;  // max, m^2/s
+};
+
+template <int D>
+struct Setup {
+  ParticleSet<D>& particles;
+  const Kernel& kernel;
+  double spacing;           // initial particle spacing dx, m
+  double rest_density;      // rho0, kg/m^3
+  double viscosity;         // dynamic viscosity mu, Pa s
+  Vec<D> body_acceleration; // sum of constant body forces, m/s^2
+  const PressureModel* pressure_model = nullptr;  // set by the effect that provides one
+};
+
+template <int D>
+class Effect {
+ public:
+  virtual ~Effect() = default;
+  virtual std::string_view name() const = 0;
+  virtual Phase phase() const = 0;
+  virtual bool pairwise() const { return false; }
+
+  // Request fields, check prerequisites (throw InputError with the fix in the message).
+  virtual void setup(Setup<D>& s) {}
+  // A constant body acceleration this effect applies (for wall pressure and sound speed).
+  virtual Vec<D> bodyAcceleration() const { return Vec<D>::Zero(); }
+  // If this effect is the scheme's pressure closure, return it.
+  virtual const PressureModel* pressureModel() const { return nullptr; }
+  virtual void stability(StabilityInputs& in) const {}
+
+  // Per-particle effects: moving particles [begin, end).
+  virtual void particles(const RhsContext<D>& ctx, std::size_t begin, std::size_t end) const {}
+  // Pair effects: particle i with its moving and fixed neighbours (within the support).
+  virtual void interact(const RhsContext<D>& ctx, Index i, std::span<const Neighbour<D>> moving,
+                        std::span<const Neighbour<D>> fixed) const {}
+};
+
+// Base for pair effects: the derived struct supplies the per-pair function and never loops.
+//   Local begin(ctx, i)                      per-particle accumulator
+//   void pair(ctx, i, nb, Local&)            a moving neighbour
+//   void pairFixed(ctx, i, nb, Local&)       a fixed neighbour (defaults to pair)
+//   void end(ctx, i, Local&)                 write the result for particle i
+template <int D, class Derived>
+class PairEffect : public Effect<D> {
+ public:
+  bool pairwise() const final { return true; }
+  void interact(const RhsContext<D>& ctx, Index i, std::span<const Neighbour<D>> moving,
+                std::span<const Neighbour<D>> fixed) const final {
+    const Derived& self = static_cast<const Derived&>(*this);
+    auto local = self.begin(ctx, i);
+    for (const Neighbour<D>& nb : moving) self.pair(ctx, i, nb, local);
+    for (const Neighbour<D>& nb : fixed) self.pairFixed(ctx, i, nb, local);
+    self.end(ctx, i, local);
+  }
+
+  template <class Local>
+  void pairFixed(const RhsContext<D>& ctx, Index i, const Neighbour<D>& nb, Local& acc) const {
+    static_cast<const Derived&>(*this).pair(ctx, i, nb, acc);
+  }
+};
+
+}  // namespace vesph

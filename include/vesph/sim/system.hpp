@@ -1,0 +1,64 @@
+#pragma once
+// The SPH discretisation as an ODE right-hand side (DESIGN.md "The shape"):
+//   rhs(t, y, ydot): unpack y into the particle set -> neighbour search -> each active effect
+//                    adds its contribution, phase by phase -> pack ydot
+// The state vector holds the moving particles only: [positions n*D | densities n |
+// velocities n*D]. Fixed particles (walls) live in the particle set and never enter it.
+#include <functional>
+#include <memory>
+#include <vector>
+
+#include "vesph/boundary/boundary.hpp"
+#include "vesph/core/domain.hpp"
+#include "vesph/core/kernel.hpp"
+#include "vesph/core/neighbours.hpp"
+#include "vesph/physics/effect.hpp"
+#include "vesph/physics/pair_driver.hpp"
+#include "vesph/time/integrator.hpp"
+
+namespace vesph {
+
+template <int D>
+class SphSystem final : public OdeSystem {
+ public:
+  ParticleSet<D> particles;
+  Domain<D> domain;
+  Kernel kernel;
+  NeighbourList<D> neighbours;
+  PairDriver<D> driver;
+  std::vector<std::unique_ptr<Effect<D>>> effects;
+  std::vector<std::unique_ptr<Boundary<D>>> boundaries;
+  // Called by afterStep (diagnostics, checks, interruption); returns false to stop.
+  std::function<bool(double t, double dt, double* y)> observer;
+
+  // Sets up boundaries and effects (field requests, prerequisites) and sorts the effects
+  // into their phases. Call once the particles exist.
+  void setup(double spacing, double rest_density, double viscosity, double skin);
+
+  std::size_t size() const override { return particles.n_moving * (2 * D + 1); }
+  StateSegments segments() const override;
+  void rhs(double t, const double* y, double* ydot) override;
+  // The same evaluation without counting it (derived fields for output, tests).
+  void evaluate(double t, const double* y, double* ydot);
+  StabilitySnapshot stability() const override;
+  bool afterStep(double t, double dt, double* y) override;
+
+  void pack(double* y) const;
+  void unpack(const double* y);
+
+  const PressureModel* pressureModel() const { return pressure_model_; }
+  Vec<D> bodyAcceleration() const { return body_acceleration_; }
+  std::uint64_t rhsEvaluations() const { return rhs_evals_; }
+
+ private:
+  void particlePass(const std::vector<Effect<D>*>& list, const RhsContext<D>& ctx);
+
+  std::vector<Effect<D>*> state_, gradients_, rates_, forces_, external_;
+  StabilityInputs stability_inputs_;
+  const PressureModel* pressure_model_ = nullptr;
+  Vec<D> body_acceleration_ = Vec<D>::Zero();
+  double max_speed_ = 0, max_acceleration_ = 0;
+  std::uint64_t rhs_evals_ = 0;
+};
+
+}  // namespace vesph

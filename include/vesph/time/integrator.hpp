@@ -1,0 +1,90 @@
+#pragma once
+// The integrator interface (DESIGN.md "Integrators"). An integrator advances the ODE state
+// y' = f(t, y) of an OdeSystem; it owns time, the system owns physics. All integrators
+// respect the same explicit stability limits (stableStep) and call the system's afterStep
+// after every accepted step (post-step hooks, diagnostics, failure checks).
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "vesph/io/config.hpp"
+
+namespace vesph {
+
+// Where positions and velocities sit in the state vector (the leapfrog treats them apart).
+struct StateSegments {
+  std::size_t position_begin = 0, position_end = 0;
+  std::size_t velocity_begin = 0, velocity_end = 0;
+};
+
+// The quantities the explicit stability limits are made of, at the last rhs evaluation.
+struct StabilitySnapshot {
+  double h = 0;                    // smoothing length, m
+  double sound_speed = 0;          // m/s (0 for schemes without one)
+  double max_speed = 0;            // max |v| over moving particles, m/s
+  double kinematic_viscosity = 0;  // m^2/s
+  double max_acceleration = 0;     // max |dv/dt| over moving particles, m/s^2
+};
+
+// Coefficients of the limits, scene keys of [integrator]:
+//   acoustic (CFL):  dt <= cfl * h / (c + v_max)              thesis 3.5, Fang eq. (51)
+//   viscous:         dt <= viscous_coefficient * h^2 / nu       Fang eq. (53)
+//   force:           dt <= force_coefficient * sqrt(h / a_max)  Fang eq. (52)
+struct StepControl {
+  double cfl = 0.125;
+  double viscous_coefficient = 0.125;
+  double force_coefficient = 0.25;
+  double max_step = std::numeric_limits<double>::infinity();
+};
+
+struct StepLimits {
+  double acoustic = std::numeric_limits<double>::infinity();
+  double viscous = std::numeric_limits<double>::infinity();
+  double force = std::numeric_limits<double>::infinity();
+  double smallest() const;
+};
+StepLimits stepLimits(const StabilitySnapshot& s, const StepControl& c);
+
+class OdeSystem {
+ public:
+  virtual ~OdeSystem() = default;
+  virtual std::size_t size() const = 0;
+  virtual StateSegments segments() const = 0;
+  virtual void rhs(double t, const double* y, double* ydot) = 0;
+  virtual StabilitySnapshot stability() const = 0;
+  // Called after each accepted step with the new state; returns false to stop the run.
+  virtual bool afterStep(double t, double dt, double* y) = 0;
+};
+
+struct IntegratorStats {
+  std::uint64_t steps = 0;
+  std::uint64_t rejected_steps = 0;
+  std::uint64_t rhs_evals = 0;
+};
+
+class Integrator {
+ public:
+  virtual ~Integrator() = default;
+  virtual std::string name() const = 0;
+  // y must stay alive and hold the state for the life of the integration.
+  virtual void start(OdeSystem& system, double t0, double* y) = 0;
+  // Advances until t == tout exactly. Returns false if afterStep stopped the run early.
+  virtual bool advance(double tout) = 0;
+  virtual double time() const = 0;
+  virtual double lastStep() const = 0;
+  virtual IntegratorStats stats() const = 0;
+};
+
+struct IntegratorEntry {
+  std::string name;
+  std::string summary;
+  std::unique_ptr<Integrator> (*make)(ConfigTable& cfg, const StepControl& control);
+};
+const std::vector<IntegratorEntry>& integratorRegistry();
+
+// Reads [integrator] (type and the step-control keys) and builds the integrator.
+std::unique_ptr<Integrator> makeIntegrator(ConfigTable& cfg);
+
+}  // namespace vesph

@@ -1,0 +1,164 @@
+// The `vesph` command (DESIGN.md "Command line"):
+//   vesph run SCENE.toml [-o DIR] [--set KEY=VALUE]... [--quiet]
+//   vesph check SCENE.toml [--set KEY=VALUE]...
+//   vesph list
+//   vesph bench SCENE.toml [--steps N] [--threads LIST] [--set KEY=VALUE]...
+// Exit codes: 0 finished, 1 other error, 2 invalid input, 3 numerical failure, 130 interrupted.
+#include <omp.h>
+
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+
+#include "vesph/core/kernel.hpp"
+#include "vesph/io/progress.hpp"
+#include "vesph/physics/registry.hpp"
+#include "vesph/sim/simulation.hpp"
+
+using namespace vesph;
+
+namespace {
+
+// Peak and current resident memory of this process from /proc/self/status, in bytes.
+long procStatusBytes(const char* key) {
+  std::ifstream in("/proc/self/status");
+  std::string line;
+  const std::string k = std::string(key) + ":";
+  while (std::getline(in, line))
+    if (line.rfind(k, 0) == 0) return std::stol(line.substr(k.size())) * 1024;
+  return -1;
+}
+void resetPeakMemory() {
+  std::ofstream out("/proc/self/clear_refs");
+  out << "5";
+}
+
+template <int D>
+int runScene(Config& cfg, const SceneHeader& h, const std::string& out_dir, bool quiet) {
+  Simulation<D> sim(cfg, h);
+  const std::string dir = out_dir.empty() ? "output/" + h.name : out_dir;
+  if (!quiet) std::cerr << sim.describe();
+  installInterruptHandlers();
+  const RunReport r = sim.run(RunOptions{dir, quiet, true, 0});
+  std::cerr << "vesph: " << statusName(r.status) << ": " << r.message << "\n"
+            << "vesph: output in " << dir << "/ (" << h.name << ".h5, " << h.name << ".xdmf, summary.json); "
+            << r.summary["steps"] << " steps, " << r.summary["rhs_evals"] << " rhs evaluations, "
+            << r.wall_seconds << " s\n";
+  return exitCode(r.status);
+}
+
+template <int D>
+int checkScene(Config& cfg, const SceneHeader& h) {
+  Simulation<D> sim(cfg, h);
+  std::cout << sim.describe() << cfg.resolvedToml() << "\n";
+  return 0;
+}
+
+template <int D>
+int benchScene(const std::string& file, const std::vector<std::string>& sets, std::uint64_t steps,
+               const std::vector<int>& threads) {
+  std::printf("%-8s %10s %8s %10s %16s %18s %14s %12s %14s\n", "threads", "particles", "steps", "wall_s",
+              "particle_steps/s", "pairs/s", "pairs/rhs", "peak_MiB", "bytes/particle");
+  for (int t : threads) {
+    omp_set_num_threads(t);
+    SceneHeader h;
+    Config cfg = loadScene(file, sets, h);
+    resetPeakMemory();
+    const long base = procStatusBytes("VmRSS");
+    Simulation<D> sim(cfg, h);
+    const RunReport r = sim.run(RunOptions{"", true, false, steps});
+    const long peak = procStatusBytes("VmHWM");
+    const double n = static_cast<double>(sim.system().particles.size());
+    const double pairs = static_cast<double>(sim.neighbourPairsEvaluated());
+    const double rhs = r.summary["rhs_evals"].get<double>();
+    const double st = r.summary["steps"].get<double>();
+    std::printf("%-8d %10.0f %8.0f %10.3f %16.4g %18.4g %14.4g %12.1f %14.0f\n", t, n, st, r.wall_seconds,
+                n * st / r.wall_seconds, pairs / r.wall_seconds, pairs / rhs, peak / 1048576.0,
+                (peak - base) / n);
+    if (r.status != RunStatus::ok) {
+      std::fprintf(stderr, "vesph bench: the run ended with status %s: %s\n", statusName(r.status), r.message.c_str());
+      return exitCode(r.status);
+    }
+  }
+  std::printf("# pairs/s: directed neighbour pairs inside the kernel support handed to the pair passes per wall second\n"
+              "# (the Newtonian WCSPH scene has one pair pass per rhs evaluation); bytes/particle: (peak RSS - RSS before\n"
+              "# building the scene) / particles\n");
+  return 0;
+}
+
+int listAll() {
+  std::cout << "effects (scene tables [effects.<name>]):\n";
+  for (const auto& e : effectRegistry<2>()) std::printf("  %-20s %s\n", e.name.c_str(), e.summary.c_str());
+  std::cout << "integrators (integrator.type):\n";
+  for (const auto& e : integratorRegistry()) std::printf("  %-20s %s\n", e.name.c_str(), e.summary.c_str());
+  std::cout << "kernels (particles.kernel):\n"
+            << "  cubic                cubic spline, thesis eq. (3.3), support 2h\n"
+            << "  quintic              quintic spline, thesis eq. (3.4), support 3h\n"
+            << "  wendland_c2          Wendland C2, support 2h\n"
+            << "boundaries:\n"
+            << "  dummy_walls          [[blocks]] of kind \"wall\": fixed particle layers, no-slip (Adami et al. 2012)\n";
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"vesph: SPH solver for transient viscoelastic free-surface flows"};
+  app.set_version_flag("--version", VESPH_VERSION);
+  app.require_subcommand(1);
+  std::string scene, out_dir;
+  std::vector<std::string> sets;
+  bool quiet = false;
+  std::uint64_t steps = 20;
+  std::vector<int> threads;
+
+  auto* run = app.add_subcommand("run", "run a scene, writing DIR/<name>.h5, .xdmf and summary.json");
+  run->add_option("scene", scene, "scene file (TOML)")->required();
+  run->add_option("-o,--output", out_dir, "output directory (default output/<scene name>)");
+  run->add_option("--set", sets, "override a scene key: --set fluid.viscosity=1e-3 (repeatable)");
+  run->add_flag("--quiet", quiet, "plain periodic progress lines instead of a live display");
+
+  auto* check = app.add_subcommand("check", "validate a scene and print it with every default resolved");
+  check->add_option("scene", scene, "scene file (TOML)")->required();
+  check->add_option("--set", sets, "override a scene key (repeatable)");
+
+  app.add_subcommand("list", "list effects, integrators, kernels and boundaries");
+
+  auto* bench = app.add_subcommand("bench", "run a scene for a fixed number of steps and print throughput");
+  bench->add_option("scene", scene, "scene file (TOML)")->required();
+  bench->add_option("--steps", steps, "steps per measurement (default 20)");
+  bench->add_option("--threads", threads, "thread counts to measure (default: 1 and all cores)")->delimiter(',');
+  bench->add_option("--set", sets, "override a scene key (repeatable)");
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const int code = app.exit(e);
+    return code == 0 ? 0 : 2;
+  }
+
+  try {
+    if (app.got_subcommand("list")) return listAll();
+    SceneHeader h;
+    if (app.got_subcommand("bench")) {
+      if (threads.empty()) threads = {1, omp_get_num_procs()};
+      if (threads.size() == 2 && threads[0] == threads[1]) threads.pop_back();
+      loadScene(scene, sets, h);
+      return h.dimension == 2 ? benchScene<2>(scene, sets, steps, threads) : benchScene<3>(scene, sets, steps, threads);
+    }
+    Config cfg = loadScene(scene, sets, h);
+    if (app.got_subcommand("check")) return h.dimension == 2 ? checkScene<2>(cfg, h) : checkScene<3>(cfg, h);
+    return h.dimension == 2 ? runScene<2>(cfg, h, out_dir, quiet) : runScene<3>(cfg, h, out_dir, quiet);
+  } catch (const InputError& e) {
+    std::cerr << "vesph: invalid input: " << e.what() << "\n";
+    return 2;
+  } catch (const NumericalFailure& e) {
+    std::cerr << "vesph: numerical failure: " << e.what() << "\n";
+    return 3;
+  } catch (const std::exception& e) {
+    std::cerr << "vesph: error: " << e.what() << "\n";
+    return 1;
+  }
+}

@@ -1,0 +1,176 @@
+#include "vesph/core/neighbours.hpp"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <string>
+
+namespace vesph {
+
+template <int D>
+void NeighbourList<D>::configure(const Domain<D>& domain, double cutoff, double skin) {
+  domain_ = domain;
+  cutoff_ = cutoff;
+  skin_ = skin;
+  const double reach = cutoff + skin;
+  for (int a = 0; a < D; ++a) {
+    const double L = domain.length(a);
+    if (!(L > 0)) throw InputError("domain: max must exceed min along every axis");
+    int n = domain.periodic[a] ? static_cast<int>(std::floor(L / reach))
+                               : std::max(1, static_cast<int>(std::ceil(L / reach)));
+    if (domain.periodic[a] && n < 3) {
+      std::ostringstream os;
+      os << "domain: the periodic length along axis " << a << " (" << L
+         << " m) must be at least 3 times the neighbour search radius (kernel support + skin = "
+         << reach << " m), i.e. at least " << 3 * reach << " m";
+      throw InputError(os.str());
+    }
+    // Cap the grid so that a huge, mostly empty domain does not allocate billions of cells.
+    n = std::min(n, 1 << 20);
+    ncell_[a] = n;
+    cell_width_[a] = domain.periodic[a] ? L / n : std::max(reach, L / n);
+  }
+  valid_ = false;
+}
+
+template <int D>
+int NeighbourList<D>::cellCoord(int a, double x) const {
+  const double y = domain_.wrap(a, x);
+  int c = static_cast<int>(std::floor((y - domain_.lo[a]) / cell_width_[a]));
+  return std::clamp(c, 0, ncell_[a] - 1);
+}
+
+template <int D>
+double NeighbourList<D>::maxDisplacement(const ParticleSet<D>& p) const {
+  double m2 = 0;
+  const std::size_t n = p.n_moving;
+#pragma omp parallel for reduction(max : m2) schedule(static)
+  for (std::size_t i = 0; i < n; ++i) {
+    double d2 = 0;
+    for (int a = 0; a < D; ++a) {
+      const double d = domain_.image(a, p.position[D * i + a] - reference_[D * i + a]);
+      d2 += d * d;
+    }
+    m2 = std::max(m2, d2);
+  }
+  return std::sqrt(m2);
+}
+
+template <int D>
+bool NeighbourList<D>::update(const ParticleSet<D>& p, bool force) {
+  const bool changed = !valid_ || p.size() != built_for_ || p.n_moving != built_moving_;
+  if (!force && !changed && maxDisplacement(p) <= 0.5 * skin_) return false;
+  build(p);
+  return true;
+}
+
+template <int D>
+void NeighbourList<D>::build(const ParticleSet<D>& p) {
+  const std::size_t N = p.size(), nm = p.n_moving;
+  std::size_t ncells = 1;
+  for (int a = 0; a < D; ++a) ncells *= static_cast<std::size_t>(ncell_[a]);
+
+  // Bin particles: counting sort, stable in particle index.
+  cell_of_.resize(N);
+  cell_start_.assign(ncells + 1, 0);
+  for (std::size_t i = 0; i < N; ++i) {
+    for (int a = 0; a < D; ++a)
+      if (!std::isfinite(p.position[D * i + a]))
+        throw NumericalFailure("non-finite position of particle id " + std::to_string(p.id[i]));
+    std::size_t c = 0;
+    for (int a = D - 1; a >= 0; --a) c = c * ncell_[a] + cellCoord(a, p.position[D * i + a]);
+    cell_of_[i] = static_cast<Index>(c);
+    ++cell_start_[c + 1];
+  }
+  for (std::size_t c = 0; c < ncells; ++c) cell_start_[c + 1] += cell_start_[c];
+  cell_items_.resize(N);
+  {
+    std::vector<std::size_t> fill(cell_start_.begin(), cell_start_.end() - 1);
+    for (std::size_t i = 0; i < N; ++i) cell_items_[fill[cell_of_[i]]++] = static_cast<Index>(i);
+  }
+
+  const double reach2 = (cutoff_ + skin_) * (cutoff_ + skin_);
+  // Visits every candidate j of particle i; fn(j) for those within reach.
+  auto forCandidates = [&](std::size_t i, auto&& fn) {
+    std::array<int, D> ci;
+    std::size_t c = cell_of_[i];
+    for (int a = 0; a < D; ++a) {
+      ci[a] = static_cast<int>(c % ncell_[a]);
+      c /= ncell_[a];
+    }
+    const double* xi = &p.position[D * i];
+    constexpr int noffsets = D == 2 ? 9 : 27;
+    for (int o = 0; o < noffsets; ++o) {
+      int rem = o;
+      std::size_t cell = 0, stride = 1;
+      bool skip = false;
+      for (int a = 0; a < D; ++a) {
+        int cc = ci[a] + (rem % 3) - 1;
+        rem /= 3;
+        if (cc < 0 || cc >= ncell_[a]) {
+          if (!domain_.periodic[a]) { skip = true; break; }
+          cc = (cc + ncell_[a]) % ncell_[a];
+        }
+        cell += stride * static_cast<std::size_t>(cc);
+        stride *= static_cast<std::size_t>(ncell_[a]);
+      }
+      if (skip) continue;
+      for (std::size_t k = cell_start_[cell]; k < cell_start_[cell + 1]; ++k) {
+        const Index j = cell_items_[k];
+        if (j == i) continue;
+        double r2 = 0;
+        for (int a = 0; a < D; ++a) {
+          const double d = domain_.image(a, xi[a] - p.position[D * j + a]);
+          r2 += d * d;
+        }
+        if (r2 < reach2) fn(j);
+      }
+    }
+  };
+
+  // Pass 1: count; pass 2: fill (moving neighbours first, then fixed).
+  std::vector<std::size_t> count_moving(N), count_fixed(N);
+#pragma omp parallel for schedule(dynamic, 256)
+  for (std::size_t i = 0; i < N; ++i) {
+    std::size_t cm = 0, cf = 0;
+    const bool fixed_i = i >= nm;
+    forCandidates(i, [&](Index j) {
+      if (j < nm) ++cm;
+      else if (!fixed_i) ++cf;
+    });
+    count_moving[i] = cm;
+    count_fixed[i] = cf;
+  }
+  start.resize(N + 1);
+  split.resize(N);
+  start[0] = 0;
+  max_count_ = 0;
+  for (std::size_t i = 0; i < N; ++i) {
+    split[i] = start[i] + count_moving[i];
+    start[i + 1] = split[i] + count_fixed[i];
+    max_count_ = std::max(max_count_, count_moving[i] + count_fixed[i]);
+  }
+  nbr.resize(start[N]);
+#pragma omp parallel for schedule(dynamic, 256)
+  for (std::size_t i = 0; i < N; ++i) {
+    std::size_t km = start[i], kf = split[i];
+    const bool fixed_i = i >= nm;
+    forCandidates(i, [&](Index j) {
+      if (j < nm) nbr[km++] = j;
+      else if (!fixed_i) nbr[kf++] = j;
+    });
+  }
+
+  reference_.assign(p.position.begin(), p.position.begin() + D * nm);
+  built_for_ = N;
+  built_moving_ = nm;
+  valid_ = true;
+  ++builds_;
+}
+
+template class NeighbourList<2>;
+template class NeighbourList<3>;
+
+}  // namespace vesph

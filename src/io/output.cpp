@@ -1,0 +1,219 @@
+#include "vesph/io/output.hpp"
+
+#include <hdf5.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+namespace vesph {
+namespace {
+
+void check(herr_t status, const char* what) {
+  if (status < 0) throw std::runtime_error(std::string("HDF5 error: ") + what);
+}
+hid_t checkId(hid_t id, const char* what) {
+  if (id < 0) throw std::runtime_error(std::string("HDF5 error: ") + what);
+  return id;
+}
+
+void attrString(hid_t loc, const char* name, const std::string& value) {
+  hid_t type = H5Tcopy(H5T_C_S1);
+  H5Tset_size(type, value.empty() ? 1 : value.size());
+  H5Tset_strpad(type, H5T_STR_NULLTERM);
+  hid_t space = H5Screate(H5S_SCALAR);
+  hid_t a = checkId(H5Acreate2(loc, name, type, space, H5P_DEFAULT, H5P_DEFAULT), name);
+  check(H5Awrite(a, type, value.empty() ? "" : value.c_str()), name);
+  H5Aclose(a);
+  H5Sclose(space);
+  H5Tclose(type);
+}
+
+template <class T>
+void attrScalar(hid_t loc, const char* name, hid_t type, T value) {
+  hid_t space = H5Screate(H5S_SCALAR);
+  hid_t a = checkId(H5Acreate2(loc, name, type, space, H5P_DEFAULT, H5P_DEFAULT), name);
+  check(H5Awrite(a, type, &value), name);
+  H5Aclose(a);
+  H5Sclose(space);
+}
+
+void dataset(hid_t group, const char* name, hid_t file_type, hid_t mem_type, const void* data,
+             std::size_t rows, std::size_t cols) {
+  hsize_t dims[2] = {rows, cols};
+  hid_t space = H5Screate_simple(cols ? 2 : 1, dims, nullptr);
+  hid_t d = checkId(H5Dcreate2(group, name, file_type, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), name);
+  if (rows) check(H5Dwrite(d, mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data), name);
+  H5Dclose(d);
+  H5Sclose(space);
+}
+
+constexpr const char* kDiagColumns[] = {"time", "dt", "kinetic_energy", "mass", "max_speed",
+                                        "max_density_deviation"};
+
+void writeAtomically(const std::string& path, const std::string& text) {
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream out(tmp, std::ios::trunc);
+    if (!out) throw std::runtime_error("cannot write " + tmp);
+    out << text;
+    out.flush();
+    if (!out) throw std::runtime_error("cannot write " + tmp);
+  }
+  std::filesystem::rename(tmp, path);
+}
+
+}  // namespace
+
+template <int D>
+OutputWriter<D>::OutputWriter(const std::string& dir, const std::string& name, const FileAttributes& attrs)
+    : dir_(dir), name_(name) {
+  std::filesystem::create_directories(dir);
+  h5_path_ = (std::filesystem::path(dir) / (name + ".h5")).string();
+  xdmf_path_ = (std::filesystem::path(dir) / (name + ".xdmf")).string();
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // errors are reported through exceptions
+  file_ = H5Fcreate(h5_path_.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+  if (file_ < 0) throw std::runtime_error("cannot create " + h5_path_);
+  attrString(file_, "format", "vesph-1");
+  attrScalar<int>(file_, "dim", H5T_NATIVE_INT, attrs.dim);
+  attrString(file_, "scene", attrs.scene_toml);
+  attrScalar<double>(file_, "dx", H5T_NATIVE_DOUBLE, attrs.dx);
+  attrScalar<double>(file_, "h", H5T_NATIVE_DOUBLE, attrs.h);
+  attrString(file_, "kernel", attrs.kernel);
+  H5Gclose(checkId(H5Gcreate2(file_, "frames", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), "frames"));
+  hid_t diag = checkId(H5Gcreate2(file_, "diagnostics", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), "diagnostics");
+  for (const char* col : kDiagColumns) {
+    hsize_t dims[1] = {0}, maxdims[1] = {H5S_UNLIMITED}, chunk[1] = {4096};
+    hid_t space = H5Screate_simple(1, dims, maxdims);
+    hid_t plist = H5Pcreate(H5P_DATASET_CREATE);
+    H5Pset_chunk(plist, 1, chunk);
+    hid_t d = checkId(H5Dcreate2(diag, col, H5T_IEEE_F64LE, space, H5P_DEFAULT, plist, H5P_DEFAULT), col);
+    H5Dclose(d);
+    H5Pclose(plist);
+    H5Sclose(space);
+  }
+  H5Gclose(diag);
+  check(H5Fflush(file_, H5F_SCOPE_GLOBAL), "flush");
+}
+
+template <int D>
+OutputWriter<D>::~OutputWriter() {
+  if (file_ >= 0) H5Fclose(file_);
+}
+
+template <int D>
+void OutputWriter<D>::appendDiagnostics(const std::vector<DiagnosticsRow>& rows) {
+  if (rows.empty()) return;
+  hid_t diag = checkId(H5Gopen2(file_, "diagnostics", H5P_DEFAULT), "diagnostics");
+  std::vector<double> col(rows.size());
+  for (std::size_t c = 0; c < std::size(kDiagColumns); ++c) {
+    for (std::size_t r = 0; r < rows.size(); ++r) col[r] = (&rows[r].time)[c];
+    hid_t d = checkId(H5Dopen2(diag, kDiagColumns[c], H5P_DEFAULT), kDiagColumns[c]);
+    hsize_t newsize[1] = {diag_rows_ + rows.size()};
+    check(H5Dset_extent(d, newsize), "extend diagnostics");
+    hid_t fspace = H5Dget_space(d);
+    hsize_t offset[1] = {diag_rows_}, count[1] = {rows.size()};
+    H5Sselect_hyperslab(fspace, H5S_SELECT_SET, offset, nullptr, count, nullptr);
+    hid_t mspace = H5Screate_simple(1, count, nullptr);
+    check(H5Dwrite(d, H5T_NATIVE_DOUBLE, mspace, fspace, H5P_DEFAULT, col.data()), "diagnostics");
+    H5Sclose(mspace);
+    H5Sclose(fspace);
+    H5Dclose(d);
+  }
+  H5Gclose(diag);
+  diag_rows_ += rows.size();
+}
+
+template <int D>
+void OutputWriter<D>::writeFrame(double time, std::int64_t step, const ParticleSet<D>& p,
+                                 const Domain<D>& domain, const std::vector<DiagnosticsRow>& new_rows) {
+  char name[32];
+  std::snprintf(name, sizeof name, "%06zu", frames_.size());
+  const std::string group_path = std::string("/frames/") + name;
+  hid_t g = checkId(H5Gcreate2(file_, group_path.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), "frame");
+  attrScalar<double>(g, "time", H5T_NATIVE_DOUBLE, time);
+  attrScalar<std::int64_t>(g, "step", H5T_NATIVE_INT64, step);
+  const std::size_t n = p.size();
+  std::vector<double> wrapped(p.position.size());
+  for (std::size_t i = 0; i < n; ++i)
+    for (int a = 0; a < D; ++a) wrapped[D * i + a] = domain.wrap(a, p.position[D * i + a]);
+  dataset(g, "id", H5T_STD_U64LE, H5T_NATIVE_UINT64, p.id.data(), n, 0);
+  dataset(g, "kind", H5T_STD_U8LE, H5T_NATIVE_UINT8, p.kind.data(), n, 0);
+  dataset(g, "position", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, wrapped.data(), n, D);
+  dataset(g, "velocity", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, p.velocity.data(), n, D);
+  dataset(g, "density", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, p.density.data(), n, 0);
+  dataset(g, "mass", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, p.mass.data(), n, 0);
+  FrameInfo info{name, time, n, false, false, false};
+  if (const Field* f = p.fields.find("pressure"); f && f->range == Field::Range::all) {
+    dataset(g, "pressure", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, f->data.data(), n, 0);
+    info.pressure = true;
+  }
+  if (const Field* f = p.fields.find("extra_stress"); f && f->range == Field::Range::all) {
+    dataset(g, "extra_stress", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, f->data.data(), n, f->components);
+    info.stress = true;
+  }
+  if (const Field* f = p.fields.find("free_surface"); f && f->range == Field::Range::all) {
+    std::vector<std::uint8_t> flag(n);
+    for (std::size_t i = 0; i < n; ++i) flag[i] = f->data[i] != 0.0;
+    dataset(g, "free_surface", H5T_STD_U8LE, H5T_NATIVE_UINT8, flag.data(), n, 0);
+    info.free_surface = true;
+  }
+  H5Gclose(g);
+  appendDiagnostics(new_rows);
+  check(H5Fflush(file_, H5F_SCOPE_GLOBAL), "flush");
+  frames_.push_back(info);
+  writeXdmf();
+}
+
+template <int D>
+void OutputWriter<D>::writeXdmf() const {
+  const std::string h5 = std::filesystem::path(h5_path_).filename().string();
+  std::ostringstream x;
+  x.precision(17);
+  x << "<?xml version=\"1.0\" ?>\n<!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n<Xdmf Version=\"3.0\">\n <Domain>\n"
+    << "  <Grid Name=\"particles\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
+  auto item = [&](const std::string& ds, std::size_t n, int cols, const char* type, int prec) {
+    x << "     <DataItem Dimensions=\"" << n;
+    if (cols) x << ' ' << cols;
+    x << "\" NumberType=\"" << type << "\" Precision=\"" << prec << "\" Format=\"HDF\">" << h5
+      << ":" << ds << "</DataItem>\n";
+  };
+  for (const FrameInfo& f : frames_) {
+    const std::string base = "/frames/" + f.group + "/";
+    x << "   <Grid Name=\"frame_" << f.group << "\" GridType=\"Uniform\">\n"
+      << "    <Time Value=\"" << f.time << "\"/>\n"
+      << "    <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"" << f.n
+      << "\" NodesPerElement=\"1\"/>\n"
+      << "    <Geometry GeometryType=\"" << (D == 2 ? "XY" : "XYZ") << "\">\n";
+    item(base + "position", f.n, D, "Float", 8);
+    x << "    </Geometry>\n";
+    auto attribute = [&](const char* name, const char* kind, int cols, const char* type, int prec) {
+      x << "    <Attribute Name=\"" << name << "\" AttributeType=\"" << kind << "\" Center=\"Node\">\n";
+      item(base + name, f.n, cols, type, prec);
+      x << "    </Attribute>\n";
+    };
+    attribute("velocity", "Vector", D, "Float", 8);
+    attribute("density", "Scalar", 0, "Float", 8);
+    attribute("mass", "Scalar", 0, "Float", 8);
+    attribute("id", "Scalar", 0, "UInt", 8);
+    attribute("kind", "Scalar", 0, "UChar", 1);
+    if (f.pressure) attribute("pressure", "Scalar", 0, "Float", 8);
+    if (f.stress) attribute("extra_stress", "Matrix", D == 2 ? 3 : 6, "Float", 8);
+    if (f.free_surface) attribute("free_surface", "Scalar", 0, "UChar", 1);
+    x << "   </Grid>\n";
+  }
+  x << "  </Grid>\n </Domain>\n</Xdmf>\n";
+  writeAtomically(xdmf_path_, x.str());
+}
+
+void writeSummary(const std::string& dir, const nlohmann::json& summary) {
+  std::filesystem::create_directories(dir);
+  writeAtomically((std::filesystem::path(dir) / "summary.json").string(), summary.dump(2) + "\n");
+}
+
+template class OutputWriter<2>;
+template class OutputWriter<3>;
+
+}  // namespace vesph

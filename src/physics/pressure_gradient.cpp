@@ -1,0 +1,55 @@
+// Pressure force per unit mass, -grad(p)/rho, in one of two SPH forms:
+//   symmetric  (thesis eq. 3.18, Fang eq. 27):
+//       dv_i/dt = - sum_j m_j (p_i/rho_i^2 + p_j/rho_j^2) grad_i W_ij
+//     conserves linear momentum exactly (antisymmetric in i, j); the default.
+//   difference (thesis eq. 3.17):
+//       dv_i/dt = - (1/rho_i) sum_j (m_j/rho_j) (p_j - p_i) grad_i W_ij
+//     exact for linear pressure fields in the interior, not momentum conserving.
+// Wall particles carry the pressure and density given them by the wall treatment.
+#include "vesph/physics/registry.hpp"
+
+namespace vesph {
+namespace {
+
+template <int D>
+class PressureGradient final : public PairEffect<D, PressureGradient<D>> {
+ public:
+  explicit PressureGradient(ConfigTable& cfg)
+      : symmetric_(cfg.choice("form", "symmetric", {"symmetric", "difference"}) == "symmetric") {}
+  std::string_view name() const override { return "pressure_gradient"; }
+  Phase phase() const override { return Phase::forces; }
+
+  void setup(Setup<D>& s) override {
+    pressure_ = s.particles.fields.find("pressure");
+    if (!pressure_)
+      throw InputError("effects.pressure_gradient needs the particle pressure, which nothing in this "
+                       "scene provides: add [effects.equation_of_state] (weakly compressible SPH)");
+  }
+
+  struct Local {
+    Vec<D> acc;
+    double pi, rhoi, pi_over_rho2;
+  };
+  Local begin(const RhsContext<D>& ctx, Index i) const {
+    const double p = pressure_->data[i], rho = ctx.particles.density[i];
+    return {Vec<D>::Zero(), p, rho, p / (rho * rho)};
+  }
+  void pair(const RhsContext<D>& ctx, Index i, const Neighbour<D>& nb, Local& l) const {
+    const ParticleSet<D>& ps = ctx.particles;
+    const double pj = pressure_->data[nb.j], rhoj = ps.density[nb.j], mj = ps.mass[nb.j];
+    const double coef = symmetric_ ? mj * (l.pi_over_rho2 + pj / (rhoj * rhoj))
+                                   : mj / rhoj * (pj - l.pi) / l.rhoi;
+    l.acc -= (coef * nb.F) * nb.rij;
+  }
+  void end(const RhsContext<D>& ctx, Index i, Local& l) const {
+    for (int a = 0; a < D; ++a) ctx.dvdt[D * i + a] += l.acc[a];
+  }
+
+ private:
+  bool symmetric_;
+  const Field* pressure_ = nullptr;
+};
+
+}  // namespace
+VESPH_EFFECT_FACTORY(makePressureGradient, PressureGradient)
+}  // namespace vesph

@@ -1,0 +1,50 @@
+#include "vesph/physics/registry.hpp"
+
+namespace vesph {
+
+// One line per effect: name in scenes, factory (defined in the effect's own file), summary.
+#define VESPH_EFFECTS(X)                                                                        \
+  X(continuity, makeContinuity, "density rate, Fang et al. eq. (26)")                          \
+  X(equation_of_state, makeEquationOfState, "WCSPH pressure p = p0 + c^2 (rho - rho0), thesis 3.5") \
+  X(pressure_gradient, makePressureGradient, "-grad(p)/rho, thesis eq. (3.18) or (3.17)")        \
+  X(viscosity, makeViscosity, "Newtonian viscous force by the SPH Laplacian, thesis eq. (3.37)") \
+  X(body_force, makeBodyForce, "constant body acceleration (driving force, gravity)")
+
+#define VESPH_DECLARE(NAME, FN, SUMMARY) \
+  template <int D>                       \
+  std::unique_ptr<Effect<D>> FN(ConfigTable&);
+VESPH_EFFECTS(VESPH_DECLARE)
+
+template <int D>
+const std::vector<EffectEntry<D>>& effectRegistry() {
+#define VESPH_ENTRY(NAME, FN, SUMMARY) EffectEntry<D>{#NAME, SUMMARY, &FN<D>},
+  static const std::vector<EffectEntry<D>> registry = {VESPH_EFFECTS(VESPH_ENTRY)};
+  return registry;
+}
+
+template <int D>
+std::vector<std::unique_ptr<Effect<D>>> makeEffects(ConfigTable& effects_table) {
+  std::vector<std::unique_ptr<Effect<D>>> out;
+  for (const std::string& name : effects_table.keys()) {
+    const EffectEntry<D>* entry = nullptr;
+    for (const auto& e : effectRegistry<D>())
+      if (e.name == name) entry = &e;
+    if (!entry) {
+      std::string valid;
+      for (const auto& e : effectRegistry<D>()) valid += (valid.empty() ? "" : ", ") + e.name;
+      effects_table.fail(name, "the name of an effect (" + valid + ")");
+    }
+    if (!effects_table.isTable(name))
+      effects_table.fail(name, "a table: write [" + effects_table.keyPath(name) + "]");
+    ConfigTable sub = effects_table.table(name);
+    out.push_back(entry->make(sub));
+  }
+  return out;
+}
+
+template const std::vector<EffectEntry<2>>& effectRegistry<2>();
+template const std::vector<EffectEntry<3>>& effectRegistry<3>();
+template std::vector<std::unique_ptr<Effect<2>>> makeEffects<2>(ConfigTable&);
+template std::vector<std::unique_ptr<Effect<3>>> makeEffects<3>(ConfigTable&);
+
+}  // namespace vesph

@@ -1,0 +1,68 @@
+// Newtonian viscous force per unit mass by the SPH Laplacian of thesis eq. (3.37), in the
+// momentum-conserving form of Morris et al. (1997) eq. (8):
+//   dv_i/dt = sum_j  m_j (mu_i + mu_j) / (rho_i rho_j) * F_ij r_ij^2/(r_ij^2 + eta^2) * (v_i - v_j)
+// with F_ij = (dW/dr)/r, eta^2 = 0.01 h^2 (guards r -> 0). For constant mu this is
+// (mu/rho_i) times eq. (3.37) with the neighbour volume m_j/rho_j.
+// Next to a wall the neighbour velocity is the wall's extrapolated no-slip velocity
+// (field "wall_velocity", vesph/boundary), which places the no-slip condition on the wall
+// surface rather than on the wall particles.
+#include "vesph/physics/registry.hpp"
+
+namespace vesph {
+namespace {
+
+template <int D>
+class Viscosity final : public PairEffect<D, Viscosity<D>> {
+ public:
+  explicit Viscosity(ConfigTable&) {}
+  std::string_view name() const override { return "viscosity"; }
+  Phase phase() const override { return Phase::forces; }
+
+  void setup(Setup<D>& s) override {
+    mu_ = s.viscosity;
+    nu_ = s.viscosity / s.rest_density;
+    eta2_ = 0.01 * s.kernel.h * s.kernel.h;
+    wall_velocity_ = s.particles.fields.find("wall_velocity");
+  }
+  void stability(StabilityInputs& in) const override {
+    in.kinematic_viscosity = std::max(in.kinematic_viscosity, nu_);
+  }
+
+  struct Local {
+    Vec<D> acc;
+    Vec<D> vi;
+    double rhoi;
+    const double* fixed_velocity;  // velocities presented by fixed particles, offset by n_moving
+  };
+  Local begin(const RhsContext<D>& ctx, Index i) const {
+    const ParticleSet<D>& p = ctx.particles;
+    const double* fv = wall_velocity_ ? wall_velocity_->data.data()
+                                      : p.velocity.data() + D * p.n_moving;
+    return {Vec<D>::Zero(), p.v(i), p.density[i], fv};
+  }
+  void pair(const RhsContext<D>& ctx, Index i, const Neighbour<D>& nb, Local& l) const {
+    const ParticleSet<D>& p = ctx.particles;
+    l.acc += weight(p, nb, l) * (l.vi - p.v(nb.j));
+  }
+  void pairFixed(const RhsContext<D>& ctx, Index i, const Neighbour<D>& nb, Local& l) const {
+    const ParticleSet<D>& p = ctx.particles;
+    const Eigen::Map<const Vec<D>> vj(l.fixed_velocity + D * (nb.j - p.n_moving));
+    l.acc += weight(p, nb, l) * (l.vi - vj);
+  }
+  void end(const RhsContext<D>& ctx, Index i, Local& l) const {
+    for (int a = 0; a < D; ++a) ctx.dvdt[D * i + a] += l.acc[a];
+  }
+
+ private:
+  double weight(const ParticleSet<D>& p, const Neighbour<D>& nb, const Local& l) const {
+    const double r2 = nb.r * nb.r;
+    return p.mass[nb.j] * 2.0 * mu_ / (l.rhoi * p.density[nb.j]) * nb.F * r2 / (r2 + eta2_);
+  }
+
+  double mu_ = 0, nu_ = 0, eta2_ = 0;
+  const Field* wall_velocity_ = nullptr;
+};
+
+}  // namespace
+VESPH_EFFECT_FACTORY(makeViscosity, Viscosity)
+}  // namespace vesph

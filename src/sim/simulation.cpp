@@ -1,0 +1,412 @@
+#include "vesph/sim/simulation.hpp"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <sstream>
+
+#include "vesph/boundary/dummy_walls.hpp"
+#include "vesph/io/progress.hpp"
+#include "vesph/physics/registry.hpp"
+
+namespace vesph {
+
+Config loadScene(const std::string& file, const std::vector<std::string>& overrides, SceneHeader& header) {
+  Config cfg = Config::fromFile(file, overrides);
+  ConfigTable root = cfg.root();
+  header.name = root.string("name", std::nullopt);
+  if (header.name.empty() || header.name.find_first_of("/\\ ") != std::string::npos)
+    root.fail("name", "a non-empty name without spaces or slashes (it names the output files)");
+  header.dimension = static_cast<int>(root.integer("dimension", 2, 2, 3));
+  return cfg;
+}
+
+const char* statusName(RunStatus s) {
+  switch (s) {
+    case RunStatus::ok: return "ok";
+    case RunStatus::diverged: return "diverged";
+    case RunStatus::interrupted: return "interrupted";
+    case RunStatus::error: return "error";
+  }
+  return "error";
+}
+
+int exitCode(RunStatus s) {
+  switch (s) {
+    case RunStatus::ok: return 0;
+    case RunStatus::diverged: return 3;
+    case RunStatus::interrupted: return 130;
+    case RunStatus::error: return 1;
+  }
+  return 1;
+}
+
+template <int D>
+Simulation<D>::Simulation(Config& config, const SceneHeader& header) : config_(config), header_(header) {
+  ConfigTable root = config.root();
+  root.markRead("name");
+  root.markRead("dimension");
+
+  // Domain.
+  ConfigTable dom = root.table("domain", false);
+  Domain<D>& domain = system_.domain;
+  domain.lo = dom.vector<D>("min", std::nullopt, "m");
+  domain.hi = dom.vector<D>("max", std::nullopt, "m");
+  const auto periodic = dom.booleans("periodic", std::vector<bool>(D, false), D);
+  for (int a = 0; a < D; ++a) {
+    domain.periodic[a] = periodic[a];
+    if (!(domain.hi[a] > domain.lo[a])) dom.fail("max", "a corner above domain.min along every axis");
+  }
+
+  // Particles and kernel.
+  ConfigTable par = root.table("particles", false);
+  dx_ = par.number("spacing", std::nullopt, Bound::positive, "m");
+  std::vector<std::string> kernels = kernelNames();
+  const KernelType kt = kernelFromName(par.choice("kernel", "quintic", kernels));
+  const double ratio = par.numberIn("smoothing_ratio", 1.6, 0.5, 4.0, "h/dx");
+  system_.kernel = Kernel(kt, D, ratio * dx_);
+  const double skin = root.table("neighbours").numberIn("skin", 0.1, 0.0, 2.0, "fraction of the kernel support");
+
+  // Fluid.
+  ConfigTable fluid = root.table("fluid", false);
+  rho0_ = fluid.number("density", std::nullopt, Bound::positive, "kg/m^3");
+  mu_ = fluid.number("viscosity", std::nullopt, Bound::nonnegative, "Pa s");
+
+  generateParticles(root);
+
+  // Effects, boundaries.
+  ConfigTable effects = root.table("effects", false);
+  system_.effects = makeEffects<D>(effects);
+  if (system_.effects.empty())
+    effects.fail("continuity", "at least one effect, e.g. [effects.continuity]");
+  if (system_.particles.nFixed() > 0) system_.boundaries.push_back(std::make_unique<DummyWalls<D>>());
+
+  // Time, integrator, output, checks.
+  ConfigTable time = root.table("time", false);
+  t_end_ = time.number("end", std::nullopt, Bound::positive, "s");
+  ConfigTable integ = root.table("integrator");
+  integrator_ = makeIntegrator(integ);
+  integrator_name_ = integrator_->name();
+
+  ConfigTable out = root.table("output");
+  std::vector<double> times = out.numbers("times", std::vector<double>{}, 0, "s");
+  const double interval = out.number("interval", t_end_, Bound::positive, "s");
+  for (double t : times)
+    if (!(t > 0 && t <= t_end_ * (1 + 1e-12))) out.fail("times", "output times in (0, time.end]");
+  for (double t = interval; t < t_end_ * (1 - 1e-12); t += interval) times.push_back(t);
+  times.push_back(t_end_);
+  std::sort(times.begin(), times.end());
+  for (double t : times)
+    if (output_times_.empty() || t - output_times_.back() > 1e-12 * t_end_) output_times_.push_back(std::min(t, t_end_));
+
+  system_.setup(dx_, rho0_, mu_, skin * system_.kernel.supportRadius());
+  markWallLayers();
+
+  ConfigTable checks = root.table("checks");
+  max_density_deviation_ = checks.numberIn("max_density_deviation", 0.5, 1e-6, 10.0, "relative");
+  const double c = system_.pressureModel() ? system_.pressureModel()->soundSpeed() : 0.0;
+  max_speed_ = checks.number("max_speed", c > 0 ? c : 1e30, Bound::positive, "m/s");
+
+  config.rejectUnknownKeys();
+  resolved_scene_ = config.resolvedToml();
+
+  y_.resize(system_.size());
+  system_.pack(y_.data());
+}
+
+template <int D>
+void Simulation<D>::generateParticles(ConfigTable& root) {
+  struct Box {
+    ParticleKind kind;
+    Vec<D> lo, hi;
+    std::string path;
+  };
+  std::vector<Box> boxes;
+  auto blocks = root.tableArray("blocks");
+  if (blocks.empty()) root.fail("blocks", "at least one [[blocks]] table with kind, min and max");
+  for (ConfigTable& b : blocks) {
+    const std::string kind = b.choice("kind", std::nullopt, {"fluid", "wall"});
+    Box box{kind == "fluid" ? ParticleKind::fluid : ParticleKind::wall, b.vector<D>("min", std::nullopt, "m"),
+            b.vector<D>("max", std::nullopt, "m"), b.path()};
+    for (int a = 0; a < D; ++a) {
+      const double L = box.hi[a] - box.lo[a];
+      if (!(L > 0)) b.fail("max", "a corner above min along every axis");
+      const double cells = L / dx_;
+      if (std::abs(cells - std::round(cells)) > 1e-6 * std::max(1.0, cells)) {
+        std::ostringstream os;
+        os << "an extent that is a whole number of particle spacings (" << dx_ << " m) along axis " << a
+           << "; the extent " << L << " m is " << cells << " spacings";
+        b.fail("max", os.str());
+      }
+      const Domain<D>& dom = system_.domain;
+      const double tol = 1e-9 * dom.length(a);
+      if (box.lo[a] < dom.lo[a] - tol || box.hi[a] > dom.hi[a] + tol)
+        b.fail("max", "a block inside the domain [domain.min, domain.max]");
+    }
+    if (box.kind == ParticleKind::wall) {
+      double thinnest = 1e300;
+      for (int a = 0; a < D; ++a)
+        if (!(system_.domain.periodic[a])) thinnest = std::min(thinnest, box.hi[a] - box.lo[a]);
+      const double support = system_.kernel.supportRadius();
+      if (thinnest < support * (1 - 1e-9)) {
+        std::ostringstream os;
+        os << "a wall at least one kernel support thick (" << support << " m = " << std::ceil(support / dx_ - 1e-9)
+           << " layers, thesis 4.2) across its thinnest non-periodic extent, which is " << thinnest << " m";
+        b.fail("max", os.str());
+      }
+    }
+    boxes.push_back(box);
+  }
+  // Blocks must not overlap (a particle would sit on another).
+  for (std::size_t i = 0; i < boxes.size(); ++i)
+    for (std::size_t j = i + 1; j < boxes.size(); ++j) {
+      bool overlap = true;
+      for (int a = 0; a < D; ++a)
+        overlap = overlap && std::min(boxes[i].hi[a], boxes[j].hi[a]) - std::max(boxes[i].lo[a], boxes[j].lo[a]) > 1e-9 * dx_;
+      if (overlap) throw InputError(config_.file() + ": " + boxes[j].path + ": overlaps " + boxes[i].path);
+    }
+
+  const Vec<D> v0 = root.table("initial").vector<D>("velocity", Vec<D>::Zero(), "m/s");
+  const double mass = rho0_ * std::pow(dx_, D);
+  ParticleSet<D>& p = system_.particles;
+  std::uint64_t next_id = 0;
+  for (ParticleKind pass : {ParticleKind::fluid, ParticleKind::wall})
+    for (const Box& b : boxes) {
+      if (b.kind != pass) continue;
+      std::array<long, D> n;
+      long total = 1;
+      for (int a = 0; a < D; ++a) {
+        n[a] = std::lround((b.hi[a] - b.lo[a]) / dx_);
+        total *= n[a];
+      }
+      for (long k = 0; k < total; ++k) {
+        long rem = k;
+        Vec<D> x;
+        for (int a = 0; a < D; ++a) {
+          x[a] = b.lo[a] + (static_cast<double>(rem % n[a]) + 0.5) * dx_;
+          rem /= n[a];
+        }
+        p.add(x, pass == ParticleKind::fluid ? v0 : Vec<D>::Zero(), rho0_, mass, pass, next_id++);
+      }
+    }
+  if (p.n_moving == 0) root.fail("blocks", "at least one block of kind \"fluid\"");
+}
+
+template <int D>
+void Simulation<D>::markWallLayers() {
+  // Wall particles within 1.5 dx of the initial fluid are "wall" (kind 1); deeper layers are
+  // "dummy" (kind 2). Both are treated alike; the distinction helps when looking at output.
+  ParticleSet<D>& p = system_.particles;
+  const auto& list = system_.neighbours;
+  const double reach2 = 2.25 * dx_ * dx_;
+  for (std::size_t w = p.n_moving; w < p.size(); ++w) {
+    bool touches = false;
+    for (std::size_t k = list.start[w]; k < list.split[w] && !touches; ++k) {
+      const Index j = list.nbr[k];
+      double r2 = 0;
+      for (int a = 0; a < D; ++a) {
+        const double d = system_.domain.image(a, p.position[D * w + a] - p.position[D * j + a]);
+        r2 += d * d;
+      }
+      touches = r2 <= reach2;
+    }
+    p.kind[w] = static_cast<std::uint8_t>(touches ? ParticleKind::wall : ParticleKind::dummy);
+  }
+}
+
+template <int D>
+DiagnosticsRow Simulation<D>::diagnostics(double t, double dt, const double* y) const {
+  const ParticleSet<D>& p = system_.particles;
+  const std::size_t n = p.n_moving;
+  const double* rho = y + n * D;
+  const double* v = y + n * (D + 1);
+  double ke = 0, mass = 0, vmax2 = 0, dev = 0;
+  const double rho0 = rho0_;
+#pragma omp parallel for reduction(+ : ke, mass) reduction(max : vmax2, dev) schedule(static)
+  for (std::size_t i = 0; i < n; ++i) {
+    double v2 = 0;
+    for (int a = 0; a < D; ++a) v2 += v[D * i + a] * v[D * i + a];
+    ke += 0.5 * p.mass[i] * v2;
+    mass += p.mass[i];
+    vmax2 = std::max(vmax2, v2);
+    dev = std::max(dev, std::abs(rho[i] / rho0 - 1.0));
+  }
+  return {t, dt, ke, mass, std::sqrt(vmax2), dev};
+}
+
+template <int D>
+std::string Simulation<D>::checkState(const DiagnosticsRow& row, const double* y) const {
+  std::ostringstream os;
+  const std::size_t n = system_.particles.n_moving;
+  if (!std::isfinite(row.kinetic_energy) || !std::isfinite(row.max_density_deviation)) {
+    for (std::size_t k = 0; k < system_.size(); ++k)
+      if (!std::isfinite(y[k])) {
+        const std::size_t i = k < n * D ? k / D : k < n * (D + 1) ? k - n * D : (k - n * (D + 1)) / D;
+        const char* field = k < n * D ? "position" : k < n * (D + 1) ? "density" : "velocity";
+        os << "non-finite " << field << " of particle id " << system_.particles.id[i] << " at t = " << row.time << " s";
+        return os.str();
+      }
+    return "non-finite diagnostics";
+  }
+  if (row.max_density_deviation > max_density_deviation_) {
+    os << "density deviates from the rest density by " << row.max_density_deviation * 100
+       << " % (> checks.max_density_deviation = " << max_density_deviation_ * 100 << " %) at t = " << row.time << " s";
+    return os.str();
+  }
+  if (row.max_speed > max_speed_) {
+    os << "a particle moves at " << row.max_speed << " m/s, faster than checks.max_speed = " << max_speed_
+       << " m/s (for WCSPH the sound speed) at t = " << row.time << " s";
+    return os.str();
+  }
+  for (std::size_t i = 0; i < n; ++i)
+    if (!system_.domain.insideNonPeriodic(y + D * i)) {
+      os << "fluid particle id " << system_.particles.id[i] << " left the domain at t = " << row.time << " s";
+      return os.str();
+    }
+  return {};
+}
+
+template <int D>
+std::string Simulation<D>::describe() const {
+  std::ostringstream os;
+  const auto& p = system_.particles;
+  const StabilitySnapshot s = system_.stability();
+  os << "# scene '" << header_.name << "': " << D << "D, " << p.size() << " particles (" << p.n_moving
+     << " fluid, " << p.nFixed() << " fixed)\n"
+     << "# dx = " << dx_ << " m, h = " << system_.kernel.h << " m, kernel " << kernelName(system_.kernel.type)
+     << " (support " << system_.kernel.supportRadius() << " m)\n";
+  if (const PressureModel* m = system_.pressureModel())
+    os << "# sound speed c = " << m->soundSpeed() << " m/s";
+  if (const PressureModel* m = system_.pressureModel(); m && m->designDensityVariation() > 0)
+    os << " (density variation delta = " << m->designDensityVariation() << ")";
+  os << "\n# effects:";
+  for (const auto& e : system_.effects) os << ' ' << e->name();
+  os << "\n# integrator " << integrator_name_ << "; output at " << output_times_.size() << " times up to "
+     << t_end_ << " s\n";
+  os << "# stability inputs: h = " << s.h << " m, c = " << s.sound_speed << " m/s, nu = " << s.kinematic_viscosity
+     << " m^2/s, |g| = " << system_.bodyAcceleration().norm() << " m/s^2\n";
+  return os.str();
+}
+
+template <int D>
+RunReport Simulation<D>::run(const RunOptions& opt) {
+  using Clock = std::chrono::steady_clock;
+  const auto t_start = Clock::now();
+  RunReport report;
+  std::unique_ptr<OutputWriter<D>> writer;
+  if (!opt.output_dir.empty())
+    writer = std::make_unique<OutputWriter<D>>(opt.output_dir, header_.name,
+                                               FileAttributes{D, resolved_scene_, dx_, system_.kernel.h,
+                                                              std::string(kernelName(system_.kernel.type))});
+  std::vector<DiagnosticsRow> pending;
+  std::vector<double> scratch(y_.size());
+  std::uint64_t steps = 0;
+  double max_dev_seen = 0;
+  std::string failure;
+  Progress progress(0.0, t_end_, opt.quiet);
+
+  // Derived fields (pressure, wall values) for a frame come from an evaluation at the state.
+  auto writeFrame = [&](double t, const std::vector<double>& y) {
+    if (!writer) return;
+    system_.unpack(y.data());
+    system_.evaluate(t, y.data(), scratch.data());
+    writer->writeFrame(t, static_cast<std::int64_t>(steps), system_.particles, system_.domain, pending);
+    pending.clear();
+  };
+
+  last_good_ = y_;
+  last_good_time_ = 0;
+  system_.observer = [&](double t, double dt, double* y) {
+    ++steps;
+    const DiagnosticsRow row = diagnostics(t, dt, y);
+    failure = checkState(row, y);
+    if (!failure.empty()) return false;
+    max_dev_seen = std::max(max_dev_seen, row.max_density_deviation);
+    pending.push_back(row);
+    std::copy(y, y + y_.size(), last_good_.begin());
+    last_good_time_ = t;
+    if (opt.progress) progress.update(t, steps, dt);
+    if (interruptRequested()) return false;
+    if (opt.max_steps && steps >= opt.max_steps) return false;
+    return true;
+  };
+
+  RunStatus status = RunStatus::ok;
+  std::string message;
+  try {
+    integrator_->start(system_, 0.0, y_.data());
+    writeFrame(0.0, y_);
+    for (double tout : output_times_) {
+      const bool reached = integrator_->advance(tout);
+      if (!reached) break;
+      writeFrame(tout, y_);
+    }
+    if (!failure.empty()) {
+      status = RunStatus::diverged;
+      message = failure;
+    } else if (interruptRequested()) {
+      status = RunStatus::interrupted;
+      message = "interrupted at t = " + std::to_string(integrator_->time()) + " s; the current state is the last frame";
+      writeFrame(integrator_->time(), y_);
+    } else if (opt.max_steps && steps >= opt.max_steps) {
+      message = "stopped after " + std::to_string(steps) + " steps as requested";
+    }
+  } catch (const NumericalFailure& e) {
+    status = RunStatus::diverged;
+    message = e.what();
+  }
+  if (status == RunStatus::diverged) {
+    message += "; the last good state (t = " + std::to_string(last_good_time_) + " s) is written as the last frame";
+    y_ = last_good_;
+    try {
+      writeFrame(last_good_time_, y_);
+    } catch (const NumericalFailure&) {
+    }
+  }
+  if (opt.progress) {
+    progress.update(integrator_->time(), steps, integrator_->lastStep(), true);
+    progress.finish();
+  }
+  report.status = status;
+  report.message = message.empty() ? "finished" : message;
+  report.final_time = status == RunStatus::diverged ? last_good_time_ : integrator_->time();
+  report.wall_seconds = std::chrono::duration<double>(Clock::now() - t_start).count();
+
+  const IntegratorStats st = integrator_->stats();
+  nlohmann::json& s = report.summary;
+  s["status"] = statusName(status);
+  s["message"] = report.message;
+  s["scene"] = header_.name;
+  s["final_time"] = report.final_time;
+  s["end_time"] = t_end_;
+  s["steps"] = st.steps;
+  s["rejected_steps"] = st.rejected_steps;
+  s["rhs_evals"] = st.rhs_evals;
+  s["neighbour_builds"] = system_.neighbours.builds();
+  s["wall_seconds"] = report.wall_seconds;
+  s["particles"] = system_.particles.size();
+  s["fluid_particles"] = system_.particles.n_moving;
+  s["integrator"] = integrator_name_;
+  s["threads"] = omp_get_max_threads();
+  s["max_density_deviation"] = max_dev_seen;
+  if (const PressureModel* m = system_.pressureModel()) {
+    s["sound_speed"] = m->soundSpeed();
+    if (m->designDensityVariation() > 0) s["design_density_variation"] = m->designDensityVariation();
+  }
+  if (writer) {
+    s["frames"] = writer->frames();
+    s["h5"] = std::filesystem::path(writer->h5Path()).filename().string();
+    s["xdmf"] = std::filesystem::path(writer->xdmfPath()).filename().string();
+    writer.reset();
+    writeSummary(opt.output_dir, s);
+  }
+  return report;
+}
+
+template class Simulation<2>;
+template class Simulation<3>;
+
+}  // namespace vesph

@@ -1,0 +1,144 @@
+#include "vesph/sim/system.hpp"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+namespace vesph {
+
+template <int D>
+void SphSystem<D>::setup(double spacing, double rest_density, double viscosity, double skin) {
+  body_acceleration_.setZero();
+  pressure_model_ = nullptr;
+  for (auto& e : effects) {
+    body_acceleration_ += e->bodyAcceleration();
+    if (const PressureModel* m = e->pressureModel()) {
+      if (pressure_model_)
+        throw InputError("two effects provide the pressure (" + std::string(e->name()) +
+                         " and another); keep one");
+      pressure_model_ = m;
+    }
+  }
+  Setup<D> s{particles, kernel, spacing, rest_density, viscosity, body_acceleration_, pressure_model_};
+  for (auto& b : boundaries) b->setup(s);
+  for (auto& e : effects) e->setup(s);
+  particles.resizeFields();
+
+  state_.clear(); gradients_.clear(); rates_.clear(); forces_.clear(); external_.clear();
+  stability_inputs_ = {};
+  for (auto& e : effects) {
+    e->stability(stability_inputs_);
+    switch (e->phase()) {
+      case Phase::state: state_.push_back(e.get()); break;
+      case Phase::gradients: gradients_.push_back(e.get()); break;
+      case Phase::rates: rates_.push_back(e.get()); break;
+      case Phase::forces: forces_.push_back(e.get()); break;
+      case Phase::external: external_.push_back(e.get()); break;
+    }
+    const bool pair_phase = e->phase() == Phase::gradients || e->phase() == Phase::forces;
+    if (e->pairwise() != pair_phase)
+      throw std::logic_error("effect " + std::string(e->name()) + " is in the wrong phase");
+  }
+  neighbours.configure(domain, kernel.supportRadius(), skin);
+  neighbours.update(particles, true);
+  driver.prepare(neighbours);
+}
+
+template <int D>
+StateSegments SphSystem<D>::segments() const {
+  const std::size_t n = particles.n_moving;
+  return {0, n * D, n * (D + 1), n * (2 * D + 1)};
+}
+
+template <int D>
+void SphSystem<D>::pack(double* y) const {
+  const std::size_t n = particles.n_moving;
+  std::memcpy(y, particles.position.data(), sizeof(double) * n * D);
+  std::memcpy(y + n * D, particles.density.data(), sizeof(double) * n);
+  std::memcpy(y + n * (D + 1), particles.velocity.data(), sizeof(double) * n * D);
+}
+
+template <int D>
+void SphSystem<D>::unpack(const double* y) {
+  const std::size_t n = particles.n_moving;
+  std::memcpy(particles.position.data(), y, sizeof(double) * n * D);
+  std::memcpy(particles.density.data(), y + n * D, sizeof(double) * n);
+  std::memcpy(particles.velocity.data(), y + n * (D + 1), sizeof(double) * n * D);
+}
+
+template <int D>
+void SphSystem<D>::particlePass(const std::vector<Effect<D>*>& list, const RhsContext<D>& ctx) {
+  if (list.empty()) return;
+  const std::size_t n = particles.n_moving;
+#pragma omp parallel
+  {
+    const std::size_t nt = static_cast<std::size_t>(omp_get_num_threads());
+    const std::size_t t = static_cast<std::size_t>(omp_get_thread_num());
+    const std::size_t b = n * t / nt, e = n * (t + 1) / nt;
+    for (Effect<D>* eff : list) eff->particles(ctx, b, e);
+  }
+}
+
+template <int D>
+void SphSystem<D>::rhs(double t, const double* y, double* ydot) {
+  ++rhs_evals_;
+  evaluate(t, y, ydot);
+}
+
+template <int D>
+void SphSystem<D>::evaluate(double t, const double* y, double* ydot) {
+  unpack(y);
+  if (neighbours.update(particles)) driver.prepare(neighbours);
+
+  const std::size_t n = particles.n_moving;
+  double* dxdt = ydot;
+  double* drhodt = ydot + n * D;
+  double* dvdt = ydot + n * (D + 1);
+  std::memcpy(dxdt, particles.velocity.data(), sizeof(double) * n * D);
+  std::memset(drhodt, 0, sizeof(double) * n * (D + 1));
+
+  const RhsContext<D> ctx{particles, kernel, domain, t, dxdt, drhodt, dvdt};
+  particlePass(state_, ctx);
+  for (auto& b : boundaries) b->update(ctx, neighbours, driver);
+  driver.run(ctx, neighbours, gradients_);
+  particlePass(rates_, ctx);
+  driver.run(ctx, neighbours, forces_);
+  particlePass(external_, ctx);
+
+  double vmax2 = 0, amax2 = 0;
+#pragma omp parallel for reduction(max : vmax2, amax2) schedule(static)
+  for (std::size_t i = 0; i < n; ++i) {
+    double v2 = 0, a2 = 0;
+    for (int a = 0; a < D; ++a) {
+      v2 += dxdt[D * i + a] * dxdt[D * i + a];
+      a2 += dvdt[D * i + a] * dvdt[D * i + a];
+    }
+    vmax2 = std::max(vmax2, v2);
+    amax2 = std::max(amax2, a2);
+  }
+  max_speed_ = std::sqrt(vmax2);
+  max_acceleration_ = std::sqrt(amax2);
+}
+
+template <int D>
+StabilitySnapshot SphSystem<D>::stability() const {
+  StabilitySnapshot s;
+  s.h = kernel.h;
+  s.sound_speed = stability_inputs_.sound_speed;
+  s.kinematic_viscosity = stability_inputs_.kinematic_viscosity;
+  s.max_speed = max_speed_;
+  s.max_acceleration = max_acceleration_;
+  return s;
+}
+
+template <int D>
+bool SphSystem<D>::afterStep(double t, double dt, double* y) {
+  return observer ? observer(t, dt, y) : true;
+}
+
+template class SphSystem<2>;
+template class SphSystem<3>;
+
+}  // namespace vesph

@@ -1,0 +1,65 @@
+#pragma once
+// Shared driver of the fixed-step predictor-correctors: the step is the smallest stability
+// limit at the current state, shortened to land exactly on the requested output time.
+#include <algorithm>
+#include <vector>
+
+#include "vesph/time/integrator.hpp"
+
+namespace vesph {
+
+class FixedStepIntegrator : public Integrator {
+ public:
+  explicit FixedStepIntegrator(const StepControl& c) : control_(c) {}
+
+  void start(OdeSystem& system, double t0, double* y) override {
+    sys_ = &system;
+    t_ = t0;
+    y_ = y;
+    n_ = system.size();
+    rate_.assign(n_, 0.0);
+    work_.assign(n_, 0.0);
+    sys_->rhs(t_, y_, rate_.data());  // F^0, also fills the stability snapshot
+    ++stats_.rhs_evals;
+  }
+
+  bool advance(double tout) override {
+    while (t_ < tout) {
+      double dt = stepLimits(sys_->stability(), control_).smallest();
+      // Land exactly on tout; split a remainder below 1.5 dt into two equal steps so that no
+      // tiny step follows a full one.
+      const double rest = tout - t_;
+      if (rest <= dt) dt = rest;
+      else if (rest < 1.5 * dt) dt = 0.5 * rest;
+      step(dt);
+      t_ = (rest == dt) ? tout : t_ + dt;
+      last_dt_ = dt;
+      ++stats_.steps;
+      if (!sys_->afterStep(t_, dt, y_)) return false;
+    }
+    return true;
+  }
+
+  double time() const override { return t_; }
+  double lastStep() const override { return last_dt_; }
+  IntegratorStats stats() const override { return stats_; }
+
+ protected:
+  // Advances y_ by dt; on entry rate_ holds F(t_, y_); on exit it must hold F at the new state.
+  virtual void step(double dt) = 0;
+
+  void evaluate(double t, const double* y, double* f) {
+    sys_->rhs(t, y, f);
+    ++stats_.rhs_evals;
+  }
+
+  StepControl control_;
+  OdeSystem* sys_ = nullptr;
+  double* y_ = nullptr;
+  std::size_t n_ = 0;
+  double t_ = 0, last_dt_ = 0;
+  std::vector<double> rate_, work_;
+  IntegratorStats stats_;
+};
+
+}  // namespace vesph
