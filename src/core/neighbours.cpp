@@ -46,7 +46,7 @@ template <int D>
 double NeighbourList<D>::maxDisplacement(const ParticleSet<D>& p) const {
   double m2 = 0;
   const std::size_t n = p.n_moving;
-#pragma omp parallel for reduction(max : m2) schedule(static)
+#pragma omp parallel for reduction(max : m2) schedule(static) if (n >= kParallelMinimum)
   for (std::size_t i = 0; i < n; ++i) {
     double d2 = 0;
     for (int a = 0; a < D; ++a) {
@@ -132,7 +132,7 @@ void NeighbourList<D>::build(const ParticleSet<D>& p) {
 
   // Pass 1: count; pass 2: fill (moving neighbours first, then fixed).
   std::vector<std::size_t> count_moving(N), count_fixed(N);
-#pragma omp parallel for schedule(dynamic, 256)
+#pragma omp parallel for schedule(dynamic, 256) if (N >= kParallelMinimum)
   for (std::size_t i = 0; i < N; ++i) {
     std::size_t cm = 0, cf = 0;
     const bool fixed_i = i >= nm;
@@ -153,7 +153,7 @@ void NeighbourList<D>::build(const ParticleSet<D>& p) {
     max_count_ = std::max(max_count_, count_moving[i] + count_fixed[i]);
   }
   nbr.resize(start[N]);
-#pragma omp parallel for schedule(dynamic, 256)
+#pragma omp parallel for schedule(dynamic, 256) if (N >= kParallelMinimum)
   for (std::size_t i = 0; i < N; ++i) {
     std::size_t km = start[i], kf = split[i];
     const bool fixed_i = i >= nm;

@@ -128,7 +128,7 @@ void OutputWriter<D>::appendDiagnostics(const std::vector<DiagnosticsRow>& rows)
 
 template <int D>
 void OutputWriter<D>::writeFrame(double time, std::int64_t step, const ParticleSet<D>& p,
-                                 const Domain<D>& domain, const std::vector<DiagnosticsRow>& new_rows) {
+                                 const std::vector<DiagnosticsRow>& new_rows) {
   char name[32];
   std::snprintf(name, sizeof name, "%06zu", frames_.size());
   const std::string group_path = std::string("/frames/") + name;
@@ -136,12 +136,9 @@ void OutputWriter<D>::writeFrame(double time, std::int64_t step, const ParticleS
   attrScalar<double>(g, "time", H5T_NATIVE_DOUBLE, time);
   attrScalar<std::int64_t>(g, "step", H5T_NATIVE_INT64, step);
   const std::size_t n = p.size();
-  std::vector<double> wrapped(p.position.size());
-  for (std::size_t i = 0; i < n; ++i)
-    for (int a = 0; a < D; ++a) wrapped[D * i + a] = domain.wrap(a, p.position[D * i + a]);
   dataset(g, "id", H5T_STD_U64LE, H5T_NATIVE_UINT64, p.id.data(), n, 0);
   dataset(g, "kind", H5T_STD_U8LE, H5T_NATIVE_UINT8, p.kind.data(), n, 0);
-  dataset(g, "position", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, wrapped.data(), n, D);
+  dataset(g, "position", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, p.position.data(), n, D);
   dataset(g, "velocity", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, p.velocity.data(), n, D);
   dataset(g, "density", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, p.density.data(), n, 0);
   dataset(g, "mass", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, p.mass.data(), n, 0);
@@ -197,7 +194,8 @@ void OutputWriter<D>::writeXdmf() const {
     attribute("velocity", "Vector", D, "Float", 8);
     attribute("density", "Scalar", 0, "Float", 8);
     attribute("mass", "Scalar", 0, "Float", 8);
-    attribute("id", "Scalar", 0, "UInt", 8);
+    // uint64 ids declared as Int/8: ParaView 5.11 reads UInt/8 as 32-bit and mangles ids >= 2^32.
+    attribute("id", "Scalar", 0, "Int", 8);
     attribute("kind", "Scalar", 0, "UChar", 1);
     if (f.pressure) attribute("pressure", "Scalar", 0, "Float", 8);
     if (f.stress) attribute("extra_stress", "Matrix", D == 2 ? 3 : 6, "Float", 8);

@@ -13,14 +13,23 @@ class Continuity final : public PairEffect<D, Continuity<D>> {
   std::string_view name() const override { return "continuity"; }
   Phase phase() const override { return Phase::forces; }
 
-  double begin(const RhsContext<D>&, Index) const { return 0.0; }
-  void pair(const RhsContext<D>& ctx, Index i, const Neighbour<D>& nb, double& acc) const {
+  // Array pointers live in the accumulator so that the pair loop keeps them in registers.
+  struct Local {
+    double acc;
+    Vec<D> vi;
+    const double* v;
+    const double* m;
+  };
+  Local begin(const RhsContext<D>& ctx, Index i) const {
     const ParticleSet<D>& p = ctx.particles;
-    double vdot = 0;
-    for (int a = 0; a < D; ++a) vdot += (p.velocity[D * i + a] - p.velocity[D * nb.j + a]) * nb.rij[a];
-    acc += p.mass[nb.j] * vdot * nb.F;
+    return {0.0, p.v(i), p.velocity.data(), p.mass.data()};
   }
-  void end(const RhsContext<D>& ctx, Index i, double& acc) const { ctx.drhodt[i] += acc; }
+  void pair(const RhsContext<D>&, Index, const Neighbour<D>& nb, Local& l) const {
+    double vdot = 0;
+    for (int a = 0; a < D; ++a) vdot += (l.vi[a] - l.v[D * nb.j + a]) * nb.rij[a];
+    l.acc += l.m[nb.j] * vdot * nb.F;
+  }
+  void end(const RhsContext<D>& ctx, Index i, Local& l) const { ctx.drhodt[i] += l.acc; }
 };
 
 }  // namespace

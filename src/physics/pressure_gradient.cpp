@@ -26,19 +26,23 @@ class PressureGradient final : public PairEffect<D, PressureGradient<D>> {
                        "scene provides: add [effects.equation_of_state] (weakly compressible SPH)");
   }
 
+  // Array pointers live in the accumulator so that the pair loop keeps them in registers.
   struct Local {
     Vec<D> acc;
     double pi, rhoi, pi_over_rho2;
+    const double* p;
+    const double* rho;
+    const double* m;
   };
   Local begin(const RhsContext<D>& ctx, Index i) const {
-    const double p = pressure_->data[i], rho = ctx.particles.density[i];
-    return {Vec<D>::Zero(), p, rho, p / (rho * rho)};
-  }
-  void pair(const RhsContext<D>& ctx, Index i, const Neighbour<D>& nb, Local& l) const {
     const ParticleSet<D>& ps = ctx.particles;
-    const double pj = pressure_->data[nb.j], rhoj = ps.density[nb.j], mj = ps.mass[nb.j];
-    const double coef = symmetric_ ? mj * (l.pi_over_rho2 + pj / (rhoj * rhoj))
-                                   : mj / rhoj * (pj - l.pi) / l.rhoi;
+    const double p = pressure_->data[i], rho = ps.density[i];
+    return {Vec<D>::Zero(), p, rho, p / (rho * rho), pressure_->data.data(), ps.density.data(), ps.mass.data()};
+  }
+  void pair(const RhsContext<D>&, Index, const Neighbour<D>& nb, Local& l) const {
+    const double pj = l.p[nb.j], inv_rhoj = 1.0 / l.rho[nb.j], mj = l.m[nb.j];
+    const double coef = symmetric_ ? mj * (l.pi_over_rho2 + pj * inv_rhoj * inv_rhoj)
+                                   : mj * inv_rhoj * (pj - l.pi) / l.rhoi;
     l.acc -= (coef * nb.F) * nb.rij;
   }
   void end(const RhsContext<D>& ctx, Index i, Local& l) const {

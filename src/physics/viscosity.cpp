@@ -28,35 +28,39 @@ class Viscosity final : public PairEffect<D, Viscosity<D>> {
     in.kinematic_viscosity = std::max(in.kinematic_viscosity, nu_);
   }
 
+  // Array pointers live in the accumulator so that the pair loop keeps them in registers.
   struct Local {
     Vec<D> acc;
     Vec<D> vi;
-    double rhoi;
-    const double* fixed_velocity;  // velocities presented by fixed particles, offset by n_moving
+    double two_mu_over_rhoi;
+    const double* v;
+    const double* rho;
+    const double* m;
+    const double* fixed_velocity;  // velocities presented by fixed particles (index j - n_fixed0)
+    std::size_t fixed0;
   };
   Local begin(const RhsContext<D>& ctx, Index i) const {
     const ParticleSet<D>& p = ctx.particles;
-    const double* fv = wall_velocity_ ? wall_velocity_->data.data()
-                                      : p.velocity.data() + D * p.n_moving;
-    return {Vec<D>::Zero(), p.v(i), p.density[i], fv};
+    const double* fv = wall_velocity_ ? wall_velocity_->data.data() : p.velocity.data();
+    const std::size_t fixed0 = wall_velocity_ ? p.n_moving : 0;
+    return {Vec<D>::Zero(), p.v(i), 2.0 * mu_ / p.density[i], p.velocity.data(), p.density.data(), p.mass.data(), fv, fixed0};
   }
-  void pair(const RhsContext<D>& ctx, Index i, const Neighbour<D>& nb, Local& l) const {
-    const ParticleSet<D>& p = ctx.particles;
-    l.acc += weight(p, nb, l) * (l.vi - p.v(nb.j));
+  void pair(const RhsContext<D>&, Index, const Neighbour<D>& nb, Local& l) const {
+    const double w = weight(nb, l);
+    for (int a = 0; a < D; ++a) l.acc[a] += w * (l.vi[a] - l.v[D * nb.j + a]);
   }
-  void pairFixed(const RhsContext<D>& ctx, Index i, const Neighbour<D>& nb, Local& l) const {
-    const ParticleSet<D>& p = ctx.particles;
-    const Eigen::Map<const Vec<D>> vj(l.fixed_velocity + D * (nb.j - p.n_moving));
-    l.acc += weight(p, nb, l) * (l.vi - vj);
+  void pairFixed(const RhsContext<D>&, Index, const Neighbour<D>& nb, Local& l) const {
+    const double w = weight(nb, l);
+    for (int a = 0; a < D; ++a) l.acc[a] += w * (l.vi[a] - l.fixed_velocity[D * (nb.j - l.fixed0) + a]);
   }
   void end(const RhsContext<D>& ctx, Index i, Local& l) const {
     for (int a = 0; a < D; ++a) ctx.dvdt[D * i + a] += l.acc[a];
   }
 
  private:
-  double weight(const ParticleSet<D>& p, const Neighbour<D>& nb, const Local& l) const {
+  double weight(const Neighbour<D>& nb, const Local& l) const {
     const double r2 = nb.r * nb.r;
-    return p.mass[nb.j] * 2.0 * mu_ / (l.rhoi * p.density[nb.j]) * nb.F * r2 / (r2 + eta2_);
+    return l.m[nb.j] * l.two_mu_over_rhoi / l.rho[nb.j] * nb.F * r2 / (r2 + eta2_);
   }
 
   double mu_ = 0, nu_ = 0, eta2_ = 0;

@@ -225,7 +225,7 @@ DiagnosticsRow Simulation<D>::diagnostics(double t, double dt, const double* y) 
   const double* v = y + n * (D + 1);
   double ke = 0, mass = 0, vmax2 = 0, dev = 0;
   const double rho0 = rho0_;
-#pragma omp parallel for reduction(+ : ke, mass) reduction(max : vmax2, dev) schedule(static)
+#pragma omp parallel for reduction(+ : ke, mass) reduction(max : vmax2, dev) schedule(static) if (n >= kParallelMinimum)
   for (std::size_t i = 0; i < n; ++i) {
     double v2 = 0;
     for (int a = 0; a < D; ++a) v2 += v[D * i + a] * v[D * i + a];
@@ -313,7 +313,7 @@ RunReport Simulation<D>::run(const RunOptions& opt) {
     if (!writer) return;
     system_.unpack(y.data());
     system_.evaluate(t, y.data(), scratch.data());
-    writer->writeFrame(t, static_cast<std::int64_t>(steps), system_.particles, system_.domain, pending);
+    writer->writeFrame(t, static_cast<std::int64_t>(steps), system_.particles, pending);
     pending.clear();
   };
 

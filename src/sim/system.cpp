@@ -63,7 +63,10 @@ void SphSystem<D>::pack(double* y) const {
 template <int D>
 void SphSystem<D>::unpack(const double* y) {
   const std::size_t n = particles.n_moving;
-  std::memcpy(particles.position.data(), y, sizeof(double) * n * D);
+  double* x = particles.position.data();
+#pragma omp parallel for schedule(static) if (n >= kParallelMinimum)
+  for (std::size_t i = 0; i < n; ++i)
+    for (int a = 0; a < D; ++a) x[D * i + a] = domain.wrap(a, y[D * i + a]);
   std::memcpy(particles.density.data(), y + n * D, sizeof(double) * n);
   std::memcpy(particles.velocity.data(), y + n * (D + 1), sizeof(double) * n * D);
 }
@@ -72,7 +75,7 @@ template <int D>
 void SphSystem<D>::particlePass(const std::vector<Effect<D>*>& list, const RhsContext<D>& ctx) {
   if (list.empty()) return;
   const std::size_t n = particles.n_moving;
-#pragma omp parallel
+#pragma omp parallel if (n >= kParallelMinimum)
   {
     const std::size_t nt = static_cast<std::size_t>(omp_get_num_threads());
     const std::size_t t = static_cast<std::size_t>(omp_get_thread_num());
@@ -108,7 +111,7 @@ void SphSystem<D>::evaluate(double t, const double* y, double* ydot) {
   particlePass(external_, ctx);
 
   double vmax2 = 0, amax2 = 0;
-#pragma omp parallel for reduction(max : vmax2, amax2) schedule(static)
+#pragma omp parallel for reduction(max : vmax2, amax2) schedule(static) if (n >= kParallelMinimum)
   for (std::size_t i = 0; i < n; ++i) {
     double v2 = 0, a2 = 0;
     for (int a = 0; a < D; ++a) {

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <vector>
 
+#include "vesph/core/types.hpp"
 #include "vesph/time/integrator.hpp"
 
 namespace vesph {

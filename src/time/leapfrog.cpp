@@ -28,7 +28,7 @@ class Leapfrog final : public FixedStepIntegrator {
     double* f = rate_.data();
     std::vector<double>& v_old = work_;  // holds v^n during the step
     // Predictor: everything to the half step.
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (n_ >= kParallelMinimum)
     for (std::size_t k = 0; k < n_; ++k) {
       if (k >= s.velocity_begin && k < s.velocity_end) v_old[k] = y[k];
       y[k] += 0.5 * dt * f[k];
@@ -36,7 +36,7 @@ class Leapfrog final : public FixedStepIntegrator {
     evaluate(t_ + 0.5 * dt, y, f);  // f^{n+1/2}
     // Velocity: full step from v^n with f^{n+1/2}; positions: corrector with v^{n+1}.
     const std::size_t nv = s.velocity_end - s.velocity_begin;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (nv >= kParallelMinimum)
     for (std::size_t k = 0; k < nv; ++k) {
       const std::size_t kv = s.velocity_begin + k;
       y[kv] = v_old[kv] + dt * f[kv];
@@ -44,7 +44,7 @@ class Leapfrog final : public FixedStepIntegrator {
     }
     // Density (and other fields): keep y^{n+1/2}, evaluate k^{n+1}, then correct.
     evaluate(t_ + dt, y, f);
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (n_ >= kParallelMinimum)
     for (std::size_t k = 0; k < n_; ++k) {
       const bool kinematic = (k >= s.velocity_begin && k < s.velocity_end) ||
                              (k >= s.position_begin && k < s.position_end);
@@ -66,13 +66,13 @@ class Midpoint final : public FixedStepIntegrator {
     double* y = y_;
     double* f = rate_.data();
     std::vector<double>& y0 = work_;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (n_ >= kParallelMinimum)
     for (std::size_t k = 0; k < n_; ++k) {
       y0[k] = y[k];
       y[k] += 0.5 * dt * f[k];
     }
     evaluate(t_ + 0.5 * dt, y, f);
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (n_ >= kParallelMinimum)
     for (std::size_t k = 0; k < n_; ++k) y[k] = y0[k] + dt * f[k];
     evaluate(t_ + dt, y, f);
   }

@@ -1,8 +1,9 @@
 #pragma once
 // The computational box: bounds per axis, and which axes are periodic.
 // Positions along periodic axes are never wrapped in the ODE state (a jump of one period
-// would wreck an error-controlled integrator's step); distances use the minimum image and
-// the output writes wrapped positions.
+// would wreck an error-controlled integrator's step). The particle set holds them wrapped
+// into [lo, hi) (SphSystem::unpack), so separations of particle-set positions are below one
+// period and the minimum image needs no rounding call in the pair loop.
 #include <array>
 #include <cmath>
 
@@ -18,11 +19,14 @@ struct Domain {
 
   double length(int a) const { return hi[a] - lo[a]; }
 
-  // Minimum-image separation along axis a.
+  // Minimum-image separation along axis a, for a separation d of two wrapped positions
+  // (|d| < one period).
   double image(int a, double d) const {
     if (!periodic[a]) return d;
     const double L = hi[a] - lo[a];
-    return d - L * std::nearbyint(d / L);
+    if (d > 0.5 * L) return d - L;
+    if (d < -0.5 * L) return d + L;
+    return d;
   }
 
   // Coordinate wrapped into [lo, hi) along periodic axes; unchanged otherwise.

@@ -35,6 +35,10 @@ struct CubicSpline {
     if (q < 2.0) { const double a = 2.0 - q; return -0.5 * a * a; }
     return 0.0;
   }
+  static double df_over_q(double q) {  // f'(q)/q, finite at q -> 0
+    if (q < 1.0) return -2.0 + 1.5 * q;
+    return df(q) / q;
+  }
 };
 
 struct QuinticSpline {
@@ -58,6 +62,7 @@ struct QuinticSpline {
     if (q < 1.0) s -= 75.0 * c * c * c * c;
     return s;
   }
+  static double df_over_q(double q) { return df(q) / q; }
 };
 
 struct WendlandC2 {
@@ -75,6 +80,11 @@ struct WendlandC2 {
     if (q >= 2.0) return 0.0;
     const double a = 1.0 - 0.5 * q;
     return -5.0 * q * a * a * a;
+  }
+  static double df_over_q(double q) {  // no division: the profile's derivative carries q
+    if (q >= 2.0) return 0.0;
+    const double a = 1.0 - 0.5 * q;
+    return -5.0 * a * a * a;
   }
 };
 

@@ -33,9 +33,9 @@ class OutputWriter {
   OutputWriter(const OutputWriter&) = delete;
   OutputWriter& operator=(const OutputWriter&) = delete;
 
-  // Writes a frame (positions wrapped into the periodic box) and the diagnostics rows
-  // gathered since the last frame; flushes everything to disk.
-  void writeFrame(double time, std::int64_t step, const ParticleSet<D>& p, const Domain<D>& domain,
+  // Writes a frame of the particle set (positions as it holds them: wrapped into the periodic
+  // box) and the diagnostics rows gathered since the last frame; flushes everything to disk.
+  void writeFrame(double time, std::int64_t step, const ParticleSet<D>& p,
                   const std::vector<DiagnosticsRow>& new_rows);
   std::size_t frames() const { return frames_.size(); }
   const std::string& h5Path() const { return h5_path_; }

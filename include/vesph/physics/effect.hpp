@@ -26,7 +26,8 @@ enum class Phase { state, gradients, rates, forces, external };
 
 // One neighbour j of particle i, with the pair geometry evaluated once per pass:
 // rij = xi - xj (minimum image), r = |rij|, W = W(r,h), F = (dW/dr)/r, so that the kernel
-// gradient with respect to xi is grad_i W_ij = F * rij.
+// gradient with respect to xi is grad_i W_ij = F * rij. W is evaluated only in passes where
+// some effect asks for it (Effect::needsKernelValue); otherwise it is left unset.
 template <int D>
 struct Neighbour {
   Vec<D> rij;
@@ -84,6 +85,8 @@ class Effect {
   virtual std::string_view name() const = 0;
   virtual Phase phase() const = 0;
   virtual bool pairwise() const { return false; }
+  // Pair effects that read Neighbour::W say so; otherwise the driver skips evaluating it.
+  virtual bool needsKernelValue() const { return false; }
 
   // Request fields, check prerequisites (throw InputError with the fix in the message).
   virtual void setup(Setup<D>& s) {}

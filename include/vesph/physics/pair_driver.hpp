@@ -30,16 +30,25 @@ class PairDriver {
   void run(const RhsContext<D>& ctx, const NeighbourList<D>& list,
            std::span<Effect<D>* const> effects) {
     if (effects.empty()) return;
+    bool need_w = false;
+    for (Effect<D>* e : effects) need_w = need_w || e->needsKernelValue();
+    if (need_w) runPass<true>(ctx, list, effects);
+    else runPass<false>(ctx, list, effects);
+  }
+
+ private:
+  template <bool WithW>
+  void runPass(const RhsContext<D>& ctx, const NeighbourList<D>& list, std::span<Effect<D>* const> effects) {
     const std::size_t n = ctx.particles.n_moving;
     std::uint64_t pairs = 0;
     ctx.kernel.visit([&](auto shape) {
-#pragma omp parallel reduction(+ : pairs)
+#pragma omp parallel reduction(+ : pairs) if (n >= kParallelMinimum)
       {
         Neighbour<D>* buf = scratch_[static_cast<std::size_t>(omp_get_thread_num())].data();
 #pragma omp for schedule(static)
         for (std::size_t i = 0; i < n; ++i) {
-          const std::size_t nm = gather(shape, ctx, list, i, list.start[i], list.split[i], buf);
-          const std::size_t nf = gather(shape, ctx, list, i, list.split[i], list.start[i + 1], buf + nm);
+          const std::size_t nm = gather<WithW>(shape, ctx, list, i, list.start[i], list.split[i], buf);
+          const std::size_t nf = gather<WithW>(shape, ctx, list, i, list.split[i], list.start[i + 1], buf + nm);
           pairs += nm + nf;
           const std::span<const Neighbour<D>> moving(buf, nm), fixed(buf + nm, nf);
           for (Effect<D>* e : effects) e->interact(ctx, static_cast<Index>(i), moving, fixed);
@@ -49,18 +58,19 @@ class PairDriver {
     pairs_ += pairs;
   }
 
+ public:
   // A pass over the fixed particles, each with its moving neighbours:
   // fn(i, span<const Neighbour<D>>) for i in [n_moving, N).
   template <class Fn>
   void runFixed(const RhsContext<D>& ctx, const NeighbourList<D>& list, Fn&& fn) {
     const std::size_t n0 = ctx.particles.n_moving, N = ctx.particles.size();
     ctx.kernel.visit([&](auto shape) {
-#pragma omp parallel
+#pragma omp parallel if (N - n0 >= kParallelMinimum)
       {
         Neighbour<D>* buf = scratch_[static_cast<std::size_t>(omp_get_thread_num())].data();
 #pragma omp for schedule(static)
         for (std::size_t i = n0; i < N; ++i) {
-          const std::size_t nm = gather(shape, ctx, list, i, list.start[i], list.split[i], buf);
+          const std::size_t nm = gather<true>(shape, ctx, list, i, list.start[i], list.split[i], buf);
           fn(static_cast<Index>(i), std::span<const Neighbour<D>>(buf, nm));
         }
       }
@@ -71,26 +81,40 @@ class PairDriver {
   std::uint64_t pairsEvaluated() const { return pairs_; }
 
  private:
-  template <class Shape>
+  template <bool WithW, class Shape>
   static std::size_t gather(Shape, const RhsContext<D>& ctx, const NeighbourList<D>& list,
                             std::size_t i, std::size_t k0, std::size_t k1, Neighbour<D>* out) {
-    const double* x = ctx.particles.position.data();
-    const double h = ctx.kernel.h, inv_h = 1.0 / h;
+    // Everything the loop reads is copied into locals first: the compiler cannot otherwise
+    // prove that the stores into `out` leave them unchanged, and reloads them every pair.
+    const double* __restrict x = ctx.particles.position.data();
+    const Index* __restrict nbr = list.nbr.data();
+    const double inv_h = 1.0 / ctx.kernel.h;
     const double cut2 = ctx.kernel.supportRadius() * ctx.kernel.supportRadius();
-    const double ws = ctx.kernel.w_scale, dws = ctx.kernel.dw_scale;
+    // F = (dW/dr)/r = (sigma/h^(D+1)) f'(q)/(q h)
+    const double ws = ctx.kernel.w_scale, fs = ctx.kernel.dw_scale * inv_h;
+    double period[D], half[D], xi[D];
+    for (int a = 0; a < D; ++a) {
+      period[a] = ctx.domain.periodic[a] ? ctx.domain.length(a) : 0.0;
+      half[a] = ctx.domain.periodic[a] ? 0.5 * period[a] : 1e300;
+      xi[a] = x[D * i + a];
+    }
     std::size_t c = 0;
     for (std::size_t k = k0; k < k1; ++k) {
-      const Index j = list.nbr[k];
-      Vec<D> d;
-      for (int a = 0; a < D; ++a) d[a] = ctx.domain.image(a, x[D * i + a] - x[D * j + a]);
-      const double r2 = d.squaredNorm();
+      const Index j = nbr[k];
+      double d[D], r2 = 0;
+      for (int a = 0; a < D; ++a) {
+        double da = xi[a] - x[D * j + a];
+        da = da > half[a] ? da - period[a] : (da < -half[a] ? da + period[a] : da);
+        d[a] = da;
+        r2 += da * da;
+      }
       if (r2 >= cut2 || r2 == 0.0) continue;
       const double r = std::sqrt(r2), q = r * inv_h;
       Neighbour<D>& nb = out[c++];
-      nb.rij = d;
+      for (int a = 0; a < D; ++a) nb.rij[a] = d[a];
       nb.r = r;
-      nb.W = ws * Shape::f(q);
-      nb.F = dws * Shape::df(q) / r;
+      if constexpr (WithW) nb.W = ws * Shape::f(q);
+      nb.F = fs * Shape::df_over_q(q);
       nb.j = j;
     }
     return c;
