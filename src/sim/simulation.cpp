@@ -102,7 +102,11 @@ Simulation<D>::Simulation(Config& config, const SceneHeader& header) : config_(c
   for (double t : times)
     if (output_times_.empty() || t - output_times_.back() > 1e-12 * t_end_) output_times_.push_back(std::min(t, t_end_));
 
-  system_.setup(dx_, rho0_, mu_, skin * system_.kernel.supportRadius());
+  try {
+    system_.setup(dx_, rho0_, mu_, skin * system_.kernel.supportRadius());
+  } catch (const InputError& e) {  // messages from effects and the domain name no file yet
+    throw InputError(config.file() + ": " + e.what());
+  }
   markWallLayers();
 
   ConfigTable checks = root.table("checks");
