@@ -313,8 +313,10 @@ RunReport Simulation<D>::run(const RunOptions& opt) {
   Progress progress(0.0, t_end_, opt.quiet);
 
   // Derived fields (pressure, wall values) for a frame come from an evaluation at the state.
+  double last_frame_time = -1;
   auto writeFrame = [&](double t, const std::vector<double>& y) {
-    if (!writer) return;
+    if (!writer || t == last_frame_time) return;  // that state is written already
+    last_frame_time = t;
     system_.unpack(y.data());
     system_.evaluate(t, y.data(), scratch.data());
     writer->writeFrame(t, static_cast<std::int64_t>(steps), system_.particles, pending);
@@ -324,10 +326,10 @@ RunReport Simulation<D>::run(const RunOptions& opt) {
   last_good_ = y_;
   last_good_time_ = 0;
   system_.observer = [&](double t, double dt, double* y) {
-    ++steps;
     const DiagnosticsRow row = diagnostics(t, dt, y);
     failure = checkState(row, y);
     if (!failure.empty()) return false;
+    ++steps;  // accepted and checked
     max_dev_seen = std::max(max_dev_seen, row.max_density_deviation);
     pending.push_back(row);
     std::copy(y, y + y_.size(), last_good_.begin());
@@ -361,6 +363,12 @@ RunReport Simulation<D>::run(const RunOptions& opt) {
   } catch (const NumericalFailure& e) {
     status = RunStatus::diverged;
     message = e.what();
+  } catch (const InputError&) {
+    throw;  // a setting that only shows at run time: exit 2, no summary of a run that never ran
+  } catch (const std::exception& e) {
+    // I/O and other errors: report them in summary.json too; what was written stays readable.
+    status = RunStatus::error;
+    message = e.what();
   }
   if (status == RunStatus::diverged) {
     message += "; the last good state (t = " + std::to_string(last_good_time_) + " s) is written as the last frame";
@@ -386,7 +394,7 @@ RunReport Simulation<D>::run(const RunOptions& opt) {
   s["scene"] = header_.name;
   s["final_time"] = report.final_time;
   s["end_time"] = t_end_;
-  s["steps"] = st.steps;
+  s["steps"] = steps;  // accepted steps (a step that failed the checks is not counted)
   s["rejected_steps"] = st.rejected_steps;
   s["rhs_evals"] = st.rhs_evals;
   s["neighbour_builds"] = system_.neighbours.builds();
@@ -405,7 +413,13 @@ RunReport Simulation<D>::run(const RunOptions& opt) {
     s["h5"] = std::filesystem::path(writer->h5Path()).filename().string();
     s["xdmf"] = std::filesystem::path(writer->xdmfPath()).filename().string();
     writer.reset();
-    writeSummary(opt.output_dir, s);
+  }
+  if (!opt.output_dir.empty()) {
+    try {
+      writeSummary(opt.output_dir, s);
+    } catch (const std::exception& e) {
+      if (status == RunStatus::ok) throw;
+    }
   }
   return report;
 }

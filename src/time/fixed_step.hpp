@@ -2,6 +2,7 @@
 // Shared driver of the fixed-step predictor-correctors: the step is the smallest stability
 // limit at the current state, shortened to land exactly on the requested output time.
 #include <algorithm>
+#include <cmath>
 #include <vector>
 
 #include "vesph/core/types.hpp"
@@ -27,6 +28,9 @@ class FixedStepIntegrator : public Integrator {
   bool advance(double tout) override {
     while (t_ < tout) {
       double dt = stepLimits(sys_->stability(), control_).smallest();
+      if (!std::isfinite(dt))
+        throw InputError("integrator: no stability limit bounds the time step (no sound speed, viscosity, "
+                         "motion or force); set integrator.max_step (s)");
       // Land exactly on tout; split a remainder below 1.5 dt into two equal steps so that no
       // tiny step follows a full one.
       const double rest = tout - t_;

@@ -13,7 +13,7 @@ StepLimits stepLimits(const StabilitySnapshot& s, const StepControl& c) {
   if (signal > 0) l.acoustic = c.cfl * s.h / signal;
   if (s.kinematic_viscosity > 0) l.viscous = c.viscous_coefficient * s.h * s.h / s.kinematic_viscosity;
   if (s.max_acceleration > 0) l.force = c.force_coefficient * std::sqrt(s.h / s.max_acceleration);
-  l.acoustic = std::min(l.acoustic, c.max_step);
+  l.acoustic = std::min(l.acoustic, c.max_step);  // max_step (default none) caps every step
   return l;
 }
 
@@ -36,7 +36,8 @@ std::unique_ptr<Integrator> makeIntegrator(ConfigTable& cfg) {
   c.cfl = cfg.numberIn("cfl", 0.125, 1e-6, 1.0);
   c.viscous_coefficient = cfg.numberIn("viscous_coefficient", 0.125, 1e-6, 1.0);
   c.force_coefficient = cfg.numberIn("force_coefficient", 0.25, 1e-6, 1.0);
-  c.max_step = cfg.number("max_step", 1e30, Bound::positive, "s");
+  if (cfg.has("max_step")) c.max_step = cfg.number("max_step", std::nullopt, Bound::positive, "s");
+  else cfg.markRead("max_step");
   for (const auto& e : integratorRegistry())
     if (e.name == type) return e.make(cfg, c);
   cfg.fail("type", "a known integrator");

@@ -25,7 +25,9 @@ struct EffectEntry {
 template <int D>
 const std::vector<EffectEntry<D>>& effectRegistry();
 
-// Builds the effects named in the scene's [effects] table, in the order the scene lists them.
+// Builds the effects named in the scene's [effects] table (in the alphabetical order of their
+// names, as the TOML table keeps them; within a phase contributions are summed, so order does
+// not matter).
 template <int D>
 std::vector<std::unique_ptr<Effect<D>>> makeEffects(ConfigTable& effects_table);
 
