@@ -4,7 +4,9 @@
 //     conserves linear momentum exactly (antisymmetric in i, j); the default.
 //   difference (thesis eq. 3.17):
 //       dv_i/dt = - (1/rho_i) sum_j (m_j/rho_j) (p_j - p_i) grad_i W_ij
-//     exact for linear pressure fields in the interior, not momentum conserving.
+//     exact for linear pressure fields up to the lattice quadrature factor of the kernel
+//     (|m - 1| ~ 5e-4 for the quintic kernel at h = 1.6 dx, tests/test_operators.cpp);
+//     not momentum conserving.
 // Wall particles carry the pressure and density given them by the wall treatment.
 #include "vesph/physics/registry.hpp"
 

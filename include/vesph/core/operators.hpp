@@ -29,7 +29,8 @@
 // Accuracy. On a regular lattice these sums are quadratures of the continuum integrals, so
 // even a linear field's gradient carries the lattice quadrature error of the kernel's first
 // moment, -sum_j V_j F_ij r_ij (x) r_ij = (1 + e) I, where e depends on the kernel and h/dx
-// (about 1e-4 to 1e-3 for h = 1.6 dx; tests/test_operators.cpp measures it). The difference
+// (at h = 1.6 dx: -5e-4 quintic, -4e-3 Wendland C2, -7e-3 cubic in 2D; tests/test_operators.cpp
+// measures it). The Laplacian of a quadratic carries the same factor. The difference
 // form has no error from the constant part of f (it cancels exactly), the symmetric form
 // does where sum_j m_j grad_i W_ij != 0 (disordered particles, near free surfaces).
 #include <vector>
