@@ -332,7 +332,10 @@ RunReport Simulation<D>::run(const RunOptions& opt) {
     ++steps;  // accepted and checked
     max_dev_seen = std::max(max_dev_seen, row.max_density_deviation);
     pending.push_back(row);
-    std::copy(y, y + y_.size(), last_good_.begin());
+    double* keep = last_good_.data();
+    const std::size_t len = y_.size();
+#pragma omp parallel for schedule(static) if (len >= kParallelMinimum)
+    for (std::size_t k = 0; k < len; ++k) keep[k] = y[k];
     last_good_time_ = t;
     if (opt.progress) progress.update(t, steps, dt);
     if (interruptRequested()) return false;

@@ -64,11 +64,18 @@ template <int D>
 void SphSystem<D>::unpack(const double* y) {
   const std::size_t n = particles.n_moving;
   double* x = particles.position.data();
+  double* rho = particles.density.data();
+  double* v = particles.velocity.data();
+  const double* y_rho = y + n * D;
+  const double* y_v = y + n * (D + 1);
 #pragma omp parallel for schedule(static) if (n >= kParallelMinimum)
-  for (std::size_t i = 0; i < n; ++i)
-    for (int a = 0; a < D; ++a) x[D * i + a] = domain.wrap(a, y[D * i + a]);
-  std::memcpy(particles.density.data(), y + n * D, sizeof(double) * n);
-  std::memcpy(particles.velocity.data(), y + n * (D + 1), sizeof(double) * n * D);
+  for (std::size_t i = 0; i < n; ++i) {
+    for (int a = 0; a < D; ++a) {
+      x[D * i + a] = domain.wrap(a, y[D * i + a]);
+      v[D * i + a] = y_v[D * i + a];
+    }
+    rho[i] = y_rho[i];
+  }
 }
 
 template <int D>
@@ -99,8 +106,15 @@ void SphSystem<D>::evaluate(double t, const double* y, double* ydot) {
   double* dxdt = ydot;
   double* drhodt = ydot + n * D;
   double* dvdt = ydot + n * (D + 1);
-  std::memcpy(dxdt, particles.velocity.data(), sizeof(double) * n * D);
-  std::memset(drhodt, 0, sizeof(double) * n * (D + 1));
+  const double* v = particles.velocity.data();
+#pragma omp parallel for schedule(static) if (n >= kParallelMinimum)
+  for (std::size_t i = 0; i < n; ++i) {
+    for (int a = 0; a < D; ++a) {
+      dxdt[D * i + a] = v[D * i + a];
+      dvdt[D * i + a] = 0.0;
+    }
+    drhodt[i] = 0.0;
+  }
 
   const RhsContext<D> ctx{particles, kernel, domain, t, dxdt, drhodt, dvdt};
   particlePass(state_, ctx);
