@@ -107,6 +107,11 @@ int listAll() {
   for (const auto& e : effectRegistry<2>()) std::printf("  %-20s %s\n", e.name.c_str(), e.summary.c_str());
   std::cout << "integrators (integrator.type):\n";
   for (const auto& e : integratorRegistry()) std::printf("  %-20s %s\n", e.name.c_str(), e.summary.c_str());
+  std::cout << "Butcher tables (integrator.table, for arkode and arkode-fixed; SUNDIALS names without ARKODE_):\n";
+  for (const auto& t : erkTables())
+    std::printf("  %-24s order %d, %s, %d stages%s\n", t.name.c_str(), t.order,
+                t.embedding_order ? ("embedding order " + std::to_string(t.embedding_order)).c_str() : "no embedding",
+                t.stages, t.embedding_order ? "" : " (arkode-fixed only)");
   std::cout << "kernels (particles.kernel):\n"
             << "  cubic                cubic spline, thesis eq. (3.3), support 2h\n"
             << "  quintic              quintic spline, thesis eq. (3.4), support 3h\n"

@@ -87,9 +87,6 @@ Simulation<D>::Simulation(Config& config, const SceneHeader& header) : config_(c
   // Time, integrator, output, checks.
   ConfigTable time = root.table("time", false);
   t_end_ = time.number("end", std::nullopt, Bound::positive, "s");
-  ConfigTable integ = root.table("integrator");
-  integrator_ = makeIntegrator(integ);
-  integrator_name_ = integrator_->name();
 
   ConfigTable out = root.table("output");
   std::vector<double> times = out.numbers("times", std::vector<double>{}, 0, "s");
@@ -108,6 +105,18 @@ Simulation<D>::Simulation(Config& config, const SceneHeader& header) : config_(c
     throw InputError(config.file() + ": " + e.what());
   }
   markWallLayers();
+
+  // The integrator, with the scales for default tolerances: the sound-speed rule's design
+  // velocity and density variation when the scene used it; else Mach 0.1 of the given sound
+  // speed and delta = 0.01.
+  ReferenceScales scales{dx_, rho0_, 0.01, 0.0};
+  if (const PressureModel* m = system_.pressureModel()) {
+    if (m->designDensityVariation() > 0) scales.density_variation = m->designDensityVariation();
+    scales.velocity = m->designVelocity() > 0 ? m->designVelocity() : 0.1 * m->soundSpeed();
+  }
+  ConfigTable integ = root.table("integrator");
+  integrator_ = makeIntegrator(integ, scales);
+  integrator_name_ = integrator_->name();
 
   ConfigTable checks = root.table("checks");
   max_density_deviation_ = checks.numberIn("max_density_deviation", 0.5, 1e-6, 10.0, "relative");

@@ -27,15 +27,15 @@ class FixedStepIntegrator : public Integrator {
 
   bool advance(double tout) override {
     while (t_ < tout) {
-      double dt = stepLimits(sys_->stability(), control_).smallest();
+      double dt = control_.fixed_step > 0 ? control_.fixed_step : stepLimits(sys_->stability(), control_).smallest();
       if (!std::isfinite(dt))
         throw InputError("integrator: no stability limit bounds the time step (no sound speed, viscosity, "
                          "motion or force); set integrator.max_step (s)");
       // Land exactly on tout; split a remainder below 1.5 dt into two equal steps so that no
       // tiny step follows a full one.
       const double rest = tout - t_;
-      if (rest <= dt) dt = rest;
-      else if (rest < 1.5 * dt) dt = 0.5 * rest;
+      if (rest <= dt * (1 + 1e-12)) dt = rest;
+      else if (rest < 1.5 * dt && control_.fixed_step == 0) dt = 0.5 * rest;
       step(dt);
       t_ = (rest == dt) ? tout : t_ + dt;
       last_dt_ = dt;

@@ -17,18 +17,22 @@ StepLimits stepLimits(const StabilitySnapshot& s, const StepControl& c) {
   return l;
 }
 
-std::unique_ptr<Integrator> makeLeapfrog(ConfigTable& cfg, const StepControl& control);
-std::unique_ptr<Integrator> makeMidpoint(ConfigTable& cfg, const StepControl& control);
+std::unique_ptr<Integrator> makeLeapfrog(ConfigTable&, const StepControl&, const ReferenceScales&);
+std::unique_ptr<Integrator> makeMidpoint(ConfigTable&, const StepControl&, const ReferenceScales&);
+std::unique_ptr<Integrator> makeArkode(ConfigTable&, const StepControl&, const ReferenceScales&);
+std::unique_ptr<Integrator> makeArkodeFixed(ConfigTable&, const StepControl&, const ReferenceScales&);
 
 const std::vector<IntegratorEntry>& integratorRegistry() {
   static const std::vector<IntegratorEntry> registry = {
       {"leapfrog", "leapfrog predictor-corrector of the thesis, eq. (3.39) ff.; fixed step from the stability limits; 2nd order", &makeLeapfrog},
       {"midpoint", "midpoint predictor-corrector of Fang et al., eqs. (49)-(50); fixed step from the stability limits; 2nd order", &makeMidpoint},
+      {"arkode", "SUNDIALS ARKODE ERKStep, adaptive error-controlled explicit Runge-Kutta (integrator.table, rtol, atol_*), step also bounded by the stability limits", &makeArkode},
+      {"arkode-fixed", "SUNDIALS ARKODE ERKStep in fixed-step mode (integrator.table); step from the stability limits or integrator.step", &makeArkodeFixed},
   };
   return registry;
 }
 
-std::unique_ptr<Integrator> makeIntegrator(ConfigTable& cfg) {
+std::unique_ptr<Integrator> makeIntegrator(ConfigTable& cfg, const ReferenceScales& scales) {
   std::vector<std::string> names;
   for (const auto& e : integratorRegistry()) names.push_back(e.name);
   const std::string type = cfg.choice("type", "leapfrog", names);
@@ -38,8 +42,12 @@ std::unique_ptr<Integrator> makeIntegrator(ConfigTable& cfg) {
   c.force_coefficient = cfg.numberIn("force_coefficient", 0.25, 1e-6, 1.0);
   if (cfg.has("max_step")) c.max_step = cfg.number("max_step", std::nullopt, Bound::positive, "s");
   else cfg.markRead("max_step");
+  if (cfg.has("step")) c.fixed_step = cfg.number("step", std::nullopt, Bound::positive, "s");
+  else cfg.markRead("step");
+  if (c.fixed_step > 0 && type == "arkode")
+    cfg.fail("step", "no fixed step for the adaptive integrator 'arkode' (use 'arkode-fixed', or initial_step)");
   for (const auto& e : integratorRegistry())
-    if (e.name == type) return e.make(cfg, c);
+    if (e.name == type) return e.make(cfg, c, scales);
   cfg.fail("type", "a known integrator");
 }
 

@@ -20,6 +20,7 @@ class Leapfrog final : public FixedStepIntegrator {
  public:
   using FixedStepIntegrator::FixedStepIntegrator;
   std::string name() const override { return "leapfrog"; }
+  int order() const override { return 2; }
 
  protected:
   void step(double dt) override {
@@ -60,6 +61,7 @@ class Midpoint final : public FixedStepIntegrator {
  public:
   using FixedStepIntegrator::FixedStepIntegrator;
   std::string name() const override { return "midpoint"; }
+  int order() const override { return 2; }
 
  protected:
   void step(double dt) override {
@@ -80,10 +82,10 @@ class Midpoint final : public FixedStepIntegrator {
 
 }  // namespace
 
-std::unique_ptr<Integrator> makeLeapfrog(ConfigTable&, const StepControl& c) {
+std::unique_ptr<Integrator> makeLeapfrog(ConfigTable&, const StepControl& c, const ReferenceScales&) {
   return std::make_unique<Leapfrog>(c);
 }
-std::unique_ptr<Integrator> makeMidpoint(ConfigTable&, const StepControl& c) {
+std::unique_ptr<Integrator> makeMidpoint(ConfigTable&, const StepControl& c, const ReferenceScales&) {
   return std::make_unique<Midpoint>(c);
 }
 

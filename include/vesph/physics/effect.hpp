@@ -57,8 +57,10 @@ struct PressureModel {
   virtual double pressure(double rho) const = 0;
   virtual double densityFor(double p) const = 0;
   virtual double soundSpeed() const = 0;
-  // Relative density variation the sound speed was chosen for (delta of thesis eq. 3.38).
+  // Relative density variation the sound speed was chosen for (delta of thesis eq. 3.38),
+  // and the flow speed it was chosen for (V of eq. 3.38); 0 when the sound speed was given.
   virtual double designDensityVariation() const = 0;
+  virtual double designVelocity() const = 0;
 };
 
 // What effects tell the integrators about explicit stability (Fang eqs. 51-53, thesis 3.5).

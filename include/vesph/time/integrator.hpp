@@ -32,11 +32,23 @@ struct StabilitySnapshot {
 //   acoustic (CFL):  dt <= cfl * h / (c + v_max)              thesis 3.5, Fang eq. (51)
 //   viscous:         dt <= viscous_coefficient * h^2 / nu       Fang eq. (53)
 //   force:           dt <= force_coefficient * sqrt(h / a_max)  Fang eq. (52)
+// fixed_step (integrator.step), when set, makes the fixed-step integrators take exactly that
+// step (shortened only to land on output times) instead of the stability limit: for temporal
+// convergence studies; the limits are not applied then.
 struct StepControl {
   double cfl = 0.125;
   double viscous_coefficient = 0.125;
   double force_coefficient = 0.25;
   double max_step = std::numeric_limits<double>::infinity();
+  double fixed_step = 0.0;
+};
+
+// Scales of the problem, for default absolute tolerances of error-controlled integrators.
+struct ReferenceScales {
+  double spacing = 1;            // dx, m
+  double density = 1;            // rho0, kg/m^3
+  double density_variation = 0.01;  // delta (relative)
+  double velocity = 0;           // expected speed, m/s (0: unknown)
 };
 
 struct StepLimits {
@@ -75,16 +87,27 @@ class Integrator {
   virtual double time() const = 0;
   virtual double lastStep() const = 0;
   virtual IntegratorStats stats() const = 0;
+  // Nominal order of accuracy (for convergence studies and tests).
+  virtual int order() const = 0;
 };
 
 struct IntegratorEntry {
   std::string name;
   std::string summary;
-  std::unique_ptr<Integrator> (*make)(ConfigTable& cfg, const StepControl& control);
+  std::unique_ptr<Integrator> (*make)(ConfigTable& cfg, const StepControl& control, const ReferenceScales& scales);
 };
 const std::vector<IntegratorEntry>& integratorRegistry();
 
 // Reads [integrator] (type and the step-control keys) and builds the integrator.
-std::unique_ptr<Integrator> makeIntegrator(ConfigTable& cfg);
+std::unique_ptr<Integrator> makeIntegrator(ConfigTable& cfg, const ReferenceScales& scales);
+
+// The explicit Butcher tables of SUNDIALS 6.4.1 (integrator.table), by name without the
+// ARKODE_ prefix, with their order q and embedding order p (0: no embedding).
+struct ButcherTableInfo {
+  std::string name;
+  int id;
+  int order, embedding_order, stages;
+};
+const std::vector<ButcherTableInfo>& erkTables();
 
 }  // namespace vesph

@@ -1,0 +1,264 @@
+// SUNDIALS ARKODE ERKStep integrators (SUNDIALS 6.4.1, Debian 12).
+//
+//   arkode        adaptive, error-controlled explicit Runge-Kutta with an embedded table;
+//                 the explicit stability limits of the SPH system (stepLimits) bound the step
+//                 through ERKStepSetStabilityFn with the CFL fraction set to 1, so adaptivity
+//                 never steps past them.
+//   arkode-fixed  the same tables in fixed-step mode, the step from the stability limits
+//                 (recomputed every step) or integrator.step.
+//
+// The state vector of the OdeSystem is wrapped as an N_Vector without copying (serial, or the
+// OpenMP N_Vector with fused operations for large states). Output times are reached with a
+// stop time, so ERKStepEvolve returns the solution at tout itself, not an interpolant.
+// After every accepted step a post-process function calls OdeSystem::afterStep (hooks,
+// diagnostics, failure checks). Registering it also avoids SUNDIALS issue 311 (6.4.1 reuses a
+// wrong right-hand side for some tables it wrongly takes as first-same-as-last): with a
+// post-process function ERKStep always recomputes the first stage.
+#include <arkode/arkode_erkstep.h>
+#include <nvector/nvector_openmp.h>
+#include <nvector/nvector_serial.h>
+#include <omp.h>
+#include <sundials/sundials_context.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <sstream>
+
+#include "vesph/core/types.hpp"
+#include "vesph/time/integrator.hpp"
+
+namespace vesph {
+
+const std::vector<ButcherTableInfo>& erkTables() {
+  static const std::vector<ButcherTableInfo> tables = [] {
+    // In the order of ARKODE_ERKTableID (arkode/arkode_butcher_erk.h, SUNDIALS 6.4.1).
+    const char* names[] = {"HEUN_EULER_2_1_2",      "BOGACKI_SHAMPINE_4_2_3", "ARK324L2SA_ERK_4_2_3",
+                           "ZONNEVELD_5_3_4",       "ARK436L2SA_ERK_6_3_4",   "SAYFY_ABURUB_6_3_4",
+                           "CASH_KARP_6_4_5",       "FEHLBERG_6_4_5",         "DORMAND_PRINCE_7_4_5",
+                           "ARK548L2SA_ERK_8_4_5",  "VERNER_8_5_6",           "FEHLBERG_13_7_8",
+                           "KNOTH_WOLKE_3_3",       "ARK437L2SA_ERK_7_3_4",   "ARK548L2SAb_ERK_8_4_5"};
+    std::vector<ButcherTableInfo> out;
+    for (int id = ARKODE_MIN_ERK_NUM; id <= ARKODE_MAX_ERK_NUM; ++id) {
+      ARKodeButcherTable B = ARKodeButcherTable_LoadERK(static_cast<ARKODE_ERKTableID>(id));
+      if (!B) continue;
+      ARKodeButcherTable byname = ARKodeButcherTable_LoadERKByName((std::string("ARKODE_") + names[id]).c_str());
+      if (!byname || byname->stages != B->stages || byname->q != B->q)
+        throw std::logic_error(std::string("SUNDIALS table name mismatch for ") + names[id]);
+      out.push_back({names[id], id, B->q, B->d ? B->p : 0, B->stages});
+      ARKodeButcherTable_Free(B);
+      ARKodeButcherTable_Free(byname);
+    }
+    return out;
+  }();
+  return tables;
+}
+
+namespace {
+
+std::string flagName(int flag) {
+  char* name = ERKStepGetReturnFlagName(flag);
+  std::string s = name ? name : std::to_string(flag);
+  std::free(name);
+  return s;
+}
+
+constexpr double kCflFraction = 0.5;
+
+class ArkodeErk final : public Integrator {
+ public:
+  ArkodeErk(bool adaptive, const ButcherTableInfo& table, const StepControl& control, double rtol,
+            std::vector<double> atol_by_segment, double initial_step)
+      : adaptive_(adaptive), table_(table), control_(control), rtol_(rtol),
+        atol_segments_(std::move(atol_by_segment)), initial_step_(initial_step) {
+    if (SUNContext_Create(nullptr, &sunctx_) != 0) throw std::runtime_error("SUNContext_Create failed");
+  }
+  ~ArkodeErk() override {
+    if (mem_) ERKStepFree(&mem_);
+    if (y_) N_VDestroy(y_);
+    if (atol_) N_VDestroy(atol_);
+    if (sunctx_) SUNContext_Free(&sunctx_);
+  }
+
+  std::string name() const override { return adaptive_ ? "arkode" : "arkode-fixed"; }
+  int order() const override { return table_.order; }
+
+  void start(OdeSystem& system, double t0, double* y) override {
+    sys_ = &system;
+    t_ = t0;
+    const sunindextype n = static_cast<sunindextype>(system.size());
+    const int threads = omp_get_max_threads();
+    if (threads > 1 && static_cast<std::size_t>(n) >= 4 * kParallelMinimum) {
+      y_ = N_VMake_OpenMP(n, y, threads, sunctx_);
+      N_VEnableFusedOps_OpenMP(y_, SUNTRUE);
+    } else {
+      y_ = N_VMake_Serial(n, y, sunctx_);
+      N_VEnableFusedOps_Serial(y_, SUNTRUE);
+    }
+    mem_ = ERKStepCreate(&ArkodeErk::rhs, t0, y_, sunctx_);
+    if (!mem_) throw std::runtime_error("ERKStepCreate failed");
+    check(ERKStepSetUserData(mem_, this), "SetUserData");
+    check(ERKStepSetTableNum(mem_, static_cast<ARKODE_ERKTableID>(table_.id)), "SetTableNum");
+    check(ERKStepSetMaxNumSteps(mem_, 1000000000L), "SetMaxNumSteps");
+    check(ERKStepSetPostprocessStepFn(mem_, &ArkodeErk::postStep), "SetPostprocessStepFn");
+    if (std::isfinite(control_.max_step)) check(ERKStepSetMaxStep(mem_, control_.max_step), "SetMaxStep");
+    if (adaptive_) {
+      // Per-field absolute tolerances (vector abstol) over the state segments.
+      atol_ = N_VClone(y_);
+      double* a = N_VGetArrayPointer(atol_);
+      const StateSegments s = system.segments();
+      const std::size_t nn = system.size();
+      for (std::size_t k = 0; k < nn; ++k) {
+        const bool pos = k >= s.position_begin && k < s.position_end;
+        const bool vel = k >= s.velocity_begin && k < s.velocity_end;
+        a[k] = pos ? atol_segments_[0] : vel ? atol_segments_[2] : atol_segments_[1];
+      }
+      check(ERKStepSVtolerances(mem_, rtol_, atol_), "SVtolerances");
+      check(ERKStepSetStabilityFn(mem_, &ArkodeErk::stability, this), "SetStabilityFn");
+      // ARKODE multiplies the stability function's step by the CFL fraction, which must be
+      // below 1; our limits already carry their coefficients, so the function returns the
+      // limit divided by this fraction.
+      check(ERKStepSetCFLFraction(mem_, kCflFraction), "SetCFLFraction");
+      if (initial_step_ > 0) check(ERKStepSetInitStep(mem_, initial_step_), "SetInitStep");
+    }
+  }
+
+  bool advance(double tout) override {
+    check(ERKStepSetStopTime(mem_, tout), "SetStopTime");
+    while (t_ < tout) {
+      if (!adaptive_) {
+        double h = control_.fixed_step > 0 ? control_.fixed_step : limit();
+        if (!std::isfinite(h))
+          throw InputError("integrator: no stability limit bounds the time step; set integrator.max_step or integrator.step (s)");
+        check(ERKStepSetFixedStep(mem_, h), "SetFixedStep");
+      }
+      double t = t_;
+      const int flag = ERKStepEvolve(mem_, tout, y_, &t, adaptive_ ? ARK_NORMAL : ARK_ONE_STEP);
+      t_ = t;
+      if (stop_requested_) return false;
+      if (!pending_error_.empty()) throw NumericalFailure(pending_error_);
+      if (flag < 0) {
+        std::ostringstream os;
+        os << "ARKODE " << name() << " (" << table_.name << ") failed at t = " << t_ << " s: " << flagName(flag);
+        if (flag == ARK_ERR_FAILURE || flag == ARK_TOO_CLOSE)
+          os << " (the error test failed repeatedly or the step became too small: the solution is blowing up or the tolerances are too tight)";
+        throw NumericalFailure(os.str());
+      }
+      if (flag == ARK_TSTOP_RETURN) t_ = tout;
+    }
+    return true;
+  }
+
+  double time() const override { return t_; }
+  double lastStep() const override {
+    double h = 0;
+    if (mem_) ERKStepGetLastStep(mem_, &h);
+    return h;
+  }
+  IntegratorStats stats() const override {
+    IntegratorStats s;
+    if (!mem_) return s;
+    long steps = 0, attempts = 0, nfe = 0, fails = 0;
+    ERKStepGetNumSteps(mem_, &steps);
+    ERKStepGetNumStepAttempts(mem_, &attempts);
+    ERKStepGetNumRhsEvals(mem_, &nfe);
+    ERKStepGetNumErrTestFails(mem_, &fails);
+    s.steps = static_cast<std::uint64_t>(steps);
+    s.rejected_steps = static_cast<std::uint64_t>(attempts - steps);
+    s.rhs_evals = static_cast<std::uint64_t>(nfe);
+    return s;
+  }
+
+ private:
+  double limit() const { return stepLimits(sys_->stability(), control_).smallest(); }
+
+  static void check(int flag, const char* what) {
+    if (flag != ARK_SUCCESS) throw std::runtime_error(std::string("ARKODE ") + what + ": " + flagName(flag));
+  }
+
+  // A right-hand side must not throw through C code: failures are kept and reported after
+  // ERKStepEvolve returns (a negative return is unrecoverable for ERKStep).
+  static int rhs(realtype t, N_Vector y, N_Vector ydot, void* data) {
+    auto* self = static_cast<ArkodeErk*>(data);
+    try {
+      self->sys_->rhs(t, N_VGetArrayPointer(y), N_VGetArrayPointer(ydot));
+      return 0;
+    } catch (const std::exception& e) {
+      self->pending_error_ = e.what();
+      return -1;
+    }
+  }
+
+  static int postStep(realtype t, N_Vector y, void* data) {
+    auto* self = static_cast<ArkodeErk*>(data);
+    double h = 0;
+    ERKStepGetLastStep(self->mem_, &h);
+    try {
+      if (!self->sys_->afterStep(t, h, N_VGetArrayPointer(y))) {
+        self->stop_requested_ = true;
+        return -1;
+      }
+    } catch (const std::exception& e) {
+      self->pending_error_ = e.what();
+      return -1;
+    }
+    return 0;
+  }
+
+  static int stability(N_Vector, realtype, realtype* hstab, void* data) {
+    const double h = static_cast<ArkodeErk*>(data)->limit();
+    *hstab = std::isfinite(h) ? h / kCflFraction : -1.0;  // a non-positive value means "no limit"
+    return 0;
+  }
+
+  bool adaptive_;
+  ButcherTableInfo table_;
+  StepControl control_;
+  double rtol_;
+  std::vector<double> atol_segments_;  // position, density, velocity
+  double initial_step_;
+  SUNContext sunctx_ = nullptr;
+  void* mem_ = nullptr;
+  N_Vector y_ = nullptr, atol_ = nullptr;
+  OdeSystem* sys_ = nullptr;
+  double t_ = 0;
+  bool stop_requested_ = false;
+  std::string pending_error_;
+};
+
+const ButcherTableInfo& tableFromConfig(ConfigTable& cfg, bool adaptive) {
+  std::vector<std::string> names;
+  for (const auto& t : erkTables())
+    if (!adaptive || t.embedding_order > 0) names.push_back(t.name);
+  const std::string name = cfg.choice("table", std::string("DORMAND_PRINCE_7_4_5"), names);
+  for (const auto& t : erkTables())
+    if (t.name == name) return t;
+  cfg.fail("table", "a known table");
+}
+
+}  // namespace
+
+std::unique_ptr<Integrator> makeArkode(ConfigTable& cfg, const StepControl& c, const ReferenceScales& s) {
+  const ButcherTableInfo& table = tableFromConfig(cfg, true);
+  const double rtol = cfg.numberIn("rtol", 1e-4, 1e-14, 0.5);
+  // Default absolute tolerances: rtol times the scale of each field (dx for positions,
+  // rho0*delta for densities, the reference velocity for velocities).
+  double vref = s.velocity;
+  if (cfg.has("reference_velocity")) vref = cfg.number("reference_velocity", std::nullopt, Bound::positive, "m/s");
+  else cfg.markRead("reference_velocity");
+  if (!(vref > 0) && !cfg.has("atol_velocity"))
+    cfg.fail("reference_velocity", "the expected flow speed in m/s (for the default velocity tolerance atol_velocity = rtol * reference_velocity); "
+                                   "no sound-speed rule gives one in this scene");
+  const double atol_x = cfg.number("atol_position", rtol * s.spacing, Bound::positive, "m");
+  const double atol_rho = cfg.number("atol_density", rtol * s.density * s.density_variation, Bound::positive, "kg/m^3");
+  const double atol_v = cfg.number("atol_velocity", rtol * vref, Bound::positive, "m/s");
+  const double h0 = cfg.has("initial_step") ? cfg.number("initial_step", std::nullopt, Bound::positive, "s") : 0.0;
+  if (!cfg.has("initial_step")) cfg.markRead("initial_step");
+  return std::make_unique<ArkodeErk>(true, table, c, rtol, std::vector<double>{atol_x, atol_rho, atol_v}, h0);
+}
+
+std::unique_ptr<Integrator> makeArkodeFixed(ConfigTable& cfg, const StepControl& c, const ReferenceScales&) {
+  const ButcherTableInfo& table = tableFromConfig(cfg, false);
+  return std::make_unique<ArkodeErk>(false, table, c, 0.0, std::vector<double>{0, 0, 0}, 0.0);
+}
+
+}  // namespace vesph
