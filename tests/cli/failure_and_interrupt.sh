@@ -8,6 +8,13 @@ expect 3 "diverged: a particle moves at .* faster than checks.max_speed" -- "$VE
 grep -q '"status": "diverged"' "$WORK/slow/summary.json" && pass || fail "summary.json status is not diverged"
 $CHECK "$WORK/slow" >"$WORK/check.log" 2>&1 && pass || fail "output after divergence is not readable/valid: $(tail -5 "$WORK/check.log")"
 
+# 1b. The same detection under the ARKODE integrators (the check runs in ERKStep's post-step
+#     function, which must stop the integration cleanly).
+for integrator in arkode arkode-fixed; do
+  expect 3 "diverged: a particle moves at .* faster than checks.max_speed" -- "$VESPH" run "$SCENE" -o "$WORK/slow_$integrator" --quiet --set integrator.type=$integrator --set checks.max_speed=1e-5
+  $CHECK "$WORK/slow_$integrator" >"$WORK/check.log" 2>&1 && pass || fail "$integrator: output after divergence is not valid: $(tail -5 "$WORK/check.log")"
+done
+
 # 2. A real numerical instability: an 8x too large viscous step limit makes the explicit
 #    viscous term unstable; the run must be stopped (exit 3), not crash or hang.
 expect 3 "diverged" -- "$VESPH" run "$SCENE" -o "$WORK/unstable" --quiet --set integrator.viscous_coefficient=1.0 --set integrator.cfl=1.0 --set integrator.force_coefficient=1.0
