@@ -115,8 +115,8 @@ void checkOrder(const std::string& type, const std::string& table) {
   double observed = NAN;
   for (std::size_t k = 0; k + 1 < dts.size(); ++k)
     if (err[k + 1] > 1e-11) observed = std::log2(err[k] / err[k + 1]);
-  INFO(type << " " << table << ": nominal order " << q << ", errors " << err[0] << " ... " << err.back()
-            << ", observed " << observed);
+  MESSAGE(type << " " << table << ": nominal order " << q << ", observed " << observed << " (errors " << err[0]
+               << " ... " << err.back() << ")");
   CHECK(std::abs(observed - q) < 0.3);
 }
 
