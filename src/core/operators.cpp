@@ -1,5 +1,7 @@
 #include "vesph/core/operators.hpp"
 
+#include "vesph/physics/pair_driver.hpp"
+
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -18,24 +20,17 @@ void checkInputs(const char* op, const ParticleSet<D>& p, const NeighbourList<D>
     throw std::invalid_argument(where + "the neighbour list was not built for this particle set");
 }
 
-// Calls fn(j, rij, F) for every neighbour j of moving particle i (moving ones, then fixed)
-// inside the kernel support, with rij = xi - xj (minimum image) and F = (dW/dr)/r. Same pair
-// selection as PairDriver::gather: r >= support and r == 0 are skipped.
-template <int D, class Shape, class Fn>
-void forNeighbours(Shape, const ParticleSet<D>& p, const NeighbourList<D>& list,
-                   const Kernel& kernel, const Domain<D>& domain, std::size_t i, Fn&& fn) {
-  const double inv_h = 1.0 / kernel.h;
-  const double cut2 = kernel.supportRadius() * kernel.supportRadius();
-  const double fs = kernel.dw_scale * inv_h;  // F = (sigma/h^(D+1)) f'(q) / (q h)
-  for (std::size_t k = list.start[i]; k < list.start[i + 1]; ++k) {
-    const Index j = list.nbr[k];
-    Vec<D> rij;
-    for (int a = 0; a < D; ++a) rij[a] = domain.image(a, p.position[D * i + a] - p.position[D * j + a]);
-    const double r2 = rij.squaredNorm();
-    if (r2 >= cut2 || r2 == 0.0) continue;
-    const double q = std::sqrt(r2) * inv_h;
-    fn(j, rij, fs * Shape::df_over_q(q));
-  }
+// Calls fn(i, j, rij, F) for every neighbour j of every moving particle i (moving ones, then
+// fixed) inside the kernel support, through the pair driver: the one neighbour loop of vesph.
+template <int D, class Fn>
+void forPairs(const ParticleSet<D>& p, const NeighbourList<D>& list, const Kernel& kernel,
+              const Domain<D>& domain, Fn&& fn) {
+  PairDriver<D> driver;
+  driver.forEachMoving(p, kernel, domain, list, false,
+                       [&](Index i, std::span<const Neighbour<D>> moving, std::span<const Neighbour<D>> fixed) {
+                         for (const Neighbour<D>& nb : moving) fn(i, nb.j, nb.rij, nb.F);
+                         for (const Neighbour<D>& nb : fixed) fn(i, nb.j, nb.rij, nb.F);
+                       });
 }
 
 }  // namespace
@@ -47,17 +42,10 @@ std::vector<double> gradientDifference(const ParticleSet<D>& p, const NeighbourL
   checkInputs("gradientDifference", p, list, kernel, f);
   const std::size_t n = p.n_moving;
   std::vector<double> out(n * D, 0.0);
-  kernel.visit([&](auto shape) {
-#pragma omp parallel for schedule(static)
-    for (std::size_t i = 0; i < n; ++i) {
-      // thesis eq. (3.17): grad f_i = sum_j (m_j/rho_j) (f_j - f_i) grad_i W_ij
-      Vec<D> g = Vec<D>::Zero();
-      const double fi = f[i];
-      forNeighbours<D>(shape, p, list, kernel, domain, i, [&](Index j, const Vec<D>& rij, double F) {
-        g += (p.mass[j] / p.density[j] * (f[j] - fi) * F) * rij;
-      });
-      for (int a = 0; a < D; ++a) out[D * i + a] = g[a];
-    }
+  // thesis eq. (3.17): grad f_i = sum_j (m_j/rho_j) (f_j - f_i) grad_i W_ij
+  forPairs(p, list, kernel, domain, [&](Index i, Index j, const Vec<D>& rij, double F) {
+    const double c = p.mass[j] / p.density[j] * (f[j] - f[i]) * F;
+    for (int a = 0; a < D; ++a) out[D * i + a] += c * rij[a];
   });
   return out;
 }
@@ -69,18 +57,11 @@ std::vector<double> gradientSymmetric(const ParticleSet<D>& p, const NeighbourLi
   checkInputs("gradientSymmetric", p, list, kernel, f);
   const std::size_t n = p.n_moving;
   std::vector<double> out(n * D, 0.0);
-  kernel.visit([&](auto shape) {
-#pragma omp parallel for schedule(static)
-    for (std::size_t i = 0; i < n; ++i) {
-      // thesis eq. (3.18): grad f_i = rho_i sum_j m_j (f_i/rho_i^2 + f_j/rho_j^2) grad_i W_ij
-      Vec<D> g = Vec<D>::Zero();
-      const double rhoi = p.density[i], fi_over_rho2 = f[i] / (rhoi * rhoi);
-      forNeighbours<D>(shape, p, list, kernel, domain, i, [&](Index j, const Vec<D>& rij, double F) {
-        const double rhoj = p.density[j];
-        g += (p.mass[j] * (fi_over_rho2 + f[j] / (rhoj * rhoj)) * F) * rij;
-      });
-      for (int a = 0; a < D; ++a) out[D * i + a] = rhoi * g[a];
-    }
+  // thesis eq. (3.18): grad f_i = rho_i sum_j m_j (f_i/rho_i^2 + f_j/rho_j^2) grad_i W_ij
+  forPairs(p, list, kernel, domain, [&](Index i, Index j, const Vec<D>& rij, double F) {
+    const double rhoi = p.density[i], rhoj = p.density[j];
+    const double c = rhoi * p.mass[j] * (f[i] / (rhoi * rhoi) + f[j] / (rhoj * rhoj)) * F;
+    for (int a = 0; a < D; ++a) out[D * i + a] += c * rij[a];
   });
   return out;
 }
@@ -92,18 +73,10 @@ std::vector<double> laplacian(const ParticleSet<D>& p, const NeighbourList<D>& l
   checkInputs("laplacian", p, list, kernel, f);
   const std::size_t n = p.n_moving;
   std::vector<double> out(n, 0.0);
-  kernel.visit([&](auto shape) {
-#pragma omp parallel for schedule(static)
-    for (std::size_t i = 0; i < n; ++i) {
-      // thesis eq. (3.37): lap f_i = 2 sum_j (m_j/rho_j) (f_i - f_j) (1/r_ij) dW/dr
-      // (sign derived in operators.hpp: +2 for f = x^2, since dW/dr <= 0)
-      double s = 0.0;
-      const double fi = f[i];
-      forNeighbours<D>(shape, p, list, kernel, domain, i, [&](Index j, const Vec<D>&, double F) {
-        s += p.mass[j] / p.density[j] * (fi - f[j]) * F;
-      });
-      out[i] = 2.0 * s;
-    }
+  // thesis eq. (3.37): lap f_i = 2 sum_j (m_j/rho_j) (f_i - f_j) (1/r_ij) dW/dr
+  // (sign derived in operators.hpp: +2 for f = x^2, since dW/dr <= 0)
+  forPairs(p, list, kernel, domain, [&](Index i, Index j, const Vec<D>&, double F) {
+    out[i] += 2.0 * p.mass[j] / p.density[j] * (f[i] - f[j]) * F;
   });
   return out;
 }

@@ -32,45 +32,34 @@ class PairDriver {
     if (effects.empty()) return;
     bool need_w = false;
     for (Effect<D>* e : effects) need_w = need_w || e->needsKernelValue();
-    if (need_w) runPass<true>(ctx, list, effects);
-    else runPass<false>(ctx, list, effects);
+    pairs_ += forEachMoving(ctx.particles, ctx.kernel, ctx.domain, list, need_w,
+                            [&](Index i, std::span<const Neighbour<D>> moving, std::span<const Neighbour<D>> fixed) {
+                              for (Effect<D>* e : effects) e->interact(ctx, i, moving, fixed);
+                            });
   }
 
- private:
-  template <bool WithW>
-  void runPass(const RhsContext<D>& ctx, const NeighbourList<D>& list, std::span<Effect<D>* const> effects) {
-    const std::size_t n = ctx.particles.n_moving;
-    std::uint64_t pairs = 0;
-    ctx.kernel.visit([&](auto shape) {
-#pragma omp parallel reduction(+ : pairs) if (n >= kParallelMinimum)
-      {
-        Neighbour<D>* buf = scratch_[static_cast<std::size_t>(omp_get_thread_num())].data();
-#pragma omp for schedule(static)
-        for (std::size_t i = 0; i < n; ++i) {
-          const std::size_t nm = gather<WithW>(shape, ctx, list, i, list.start[i], list.split[i], buf);
-          const std::size_t nf = gather<WithW>(shape, ctx, list, i, list.split[i], list.start[i + 1], buf + nm);
-          pairs += nm + nf;
-          const std::span<const Neighbour<D>> moving(buf, nm), fixed(buf + nm, nf);
-          for (Effect<D>* e : effects) e->interact(ctx, static_cast<Index>(i), moving, fixed);
-        }
-      }
-    });
-    pairs_ += pairs;
+  // The neighbour loop itself: fn(i, moving neighbours, fixed neighbours) for every moving
+  // particle i, in parallel. W is evaluated only with with_w. Returns the pairs handed out.
+  template <class Fn>
+  std::uint64_t forEachMoving(const ParticleSet<D>& p, const Kernel& kernel, const Domain<D>& domain,
+                              const NeighbourList<D>& list, bool with_w, Fn&& fn) {
+    prepare(list);
+    return with_w ? loop<true>(p, kernel, domain, list, fn) : loop<false>(p, kernel, domain, list, fn);
   }
 
- public:
   // A pass over the fixed particles, each with its moving neighbours:
   // fn(i, span<const Neighbour<D>>) for i in [n_moving, N).
   template <class Fn>
   void runFixed(const RhsContext<D>& ctx, const NeighbourList<D>& list, Fn&& fn) {
-    const std::size_t n0 = ctx.particles.n_moving, N = ctx.particles.size();
+    const ParticleSet<D>& p = ctx.particles;
+    const std::size_t n0 = p.n_moving, N = p.size();
     ctx.kernel.visit([&](auto shape) {
 #pragma omp parallel if (N - n0 >= kParallelMinimum)
       {
         Neighbour<D>* buf = scratch_[static_cast<std::size_t>(omp_get_thread_num())].data();
 #pragma omp for schedule(static)
         for (std::size_t i = n0; i < N; ++i) {
-          const std::size_t nm = gather<true>(shape, ctx, list, i, list.start[i], list.split[i], buf);
+          const std::size_t nm = gather<true>(shape, p, ctx.kernel, ctx.domain, list, i, list.start[i], list.split[i], buf);
           fn(static_cast<Index>(i), std::span<const Neighbour<D>>(buf, nm));
         }
       }
@@ -81,21 +70,43 @@ class PairDriver {
   std::uint64_t pairsEvaluated() const { return pairs_; }
 
  private:
+  template <bool WithW, class Fn>
+  std::uint64_t loop(const ParticleSet<D>& p, const Kernel& kernel, const Domain<D>& domain,
+                     const NeighbourList<D>& list, Fn& fn) {
+    const std::size_t n = p.n_moving;
+    std::uint64_t pairs = 0;
+    kernel.visit([&](auto shape) {
+#pragma omp parallel reduction(+ : pairs) if (n >= kParallelMinimum)
+      {
+        Neighbour<D>* buf = scratch_[static_cast<std::size_t>(omp_get_thread_num())].data();
+#pragma omp for schedule(static)
+        for (std::size_t i = 0; i < n; ++i) {
+          const std::size_t nm = gather<WithW>(shape, p, kernel, domain, list, i, list.start[i], list.split[i], buf);
+          const std::size_t nf = gather<WithW>(shape, p, kernel, domain, list, i, list.split[i], list.start[i + 1], buf + nm);
+          pairs += nm + nf;
+          fn(static_cast<Index>(i), std::span<const Neighbour<D>>(buf, nm), std::span<const Neighbour<D>>(buf + nm, nf));
+        }
+      }
+    });
+    return pairs;
+  }
+
   template <bool WithW, class Shape>
-  static std::size_t gather(Shape, const RhsContext<D>& ctx, const NeighbourList<D>& list,
-                            std::size_t i, std::size_t k0, std::size_t k1, Neighbour<D>* out) {
+  static std::size_t gather(Shape, const ParticleSet<D>& p, const Kernel& kernel, const Domain<D>& domain,
+                            const NeighbourList<D>& list, std::size_t i, std::size_t k0, std::size_t k1,
+                            Neighbour<D>* out) {
     // Everything the loop reads is copied into locals first: the compiler cannot otherwise
     // prove that the stores into `out` leave them unchanged, and reloads them every pair.
-    const double* __restrict x = ctx.particles.position.data();
+    const double* __restrict x = p.position.data();
     const Index* __restrict nbr = list.nbr.data();
-    const double inv_h = 1.0 / ctx.kernel.h;
-    const double cut2 = ctx.kernel.supportRadius() * ctx.kernel.supportRadius();
+    const double inv_h = 1.0 / kernel.h;
+    const double cut2 = kernel.supportRadius() * kernel.supportRadius();
     // F = (dW/dr)/r = (sigma/h^(D+1)) f'(q)/(q h)
-    const double ws = ctx.kernel.w_scale, fs = ctx.kernel.dw_scale * inv_h;
+    const double ws = kernel.w_scale, fs = kernel.dw_scale * inv_h;
     double period[D], half[D], xi[D];
     for (int a = 0; a < D; ++a) {
-      period[a] = ctx.domain.periodic[a] ? ctx.domain.length(a) : 0.0;
-      half[a] = ctx.domain.periodic[a] ? 0.5 * period[a] : 1e300;
+      period[a] = domain.periodic[a] ? domain.length(a) : 0.0;
+      half[a] = domain.periodic[a] ? 0.5 * period[a] : 1e300;
       xi[a] = x[D * i + a];
     }
     std::size_t c = 0;
