@@ -72,18 +72,23 @@ void NeighbourList<D>::build(const ParticleSet<D>& p) {
   std::size_t ncells = 1;
   for (int a = 0; a < D; ++a) ncells *= static_cast<std::size_t>(ncell_[a]);
 
-  // Bin particles: counting sort, stable in particle index.
+  // Bin particles: cell of each particle in parallel, then a counting sort, stable in
+  // particle index.
   cell_of_.resize(N);
   cell_start_.assign(ncells + 1, 0);
+  long bad = -1;
+#pragma omp parallel for schedule(static) if (N >= kParallelMinimum) reduction(max : bad)
   for (std::size_t i = 0; i < N; ++i) {
-    for (int a = 0; a < D; ++a)
-      if (!std::isfinite(p.position[D * i + a]))
-        throw NumericalFailure("non-finite position of particle id " + std::to_string(p.id[i]));
     std::size_t c = 0;
-    for (int a = D - 1; a >= 0; --a) c = c * ncell_[a] + cellCoord(a, p.position[D * i + a]);
+    for (int a = D - 1; a >= 0; --a) {
+      const double x = p.position[D * i + a];
+      if (!std::isfinite(x)) bad = std::max(bad, static_cast<long>(i));
+      c = c * ncell_[a] + (std::isfinite(x) ? cellCoord(a, x) : 0);
+    }
     cell_of_[i] = static_cast<Index>(c);
-    ++cell_start_[c + 1];
   }
+  if (bad >= 0) throw NumericalFailure("non-finite position of particle id " + std::to_string(p.id[bad]));
+  for (std::size_t i = 0; i < N; ++i) ++cell_start_[cell_of_[i] + 1];
   for (std::size_t c = 0; c < ncells; ++c) cell_start_[c + 1] += cell_start_[c];
   cell_items_.resize(N);
   {
