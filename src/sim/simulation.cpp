@@ -255,15 +255,23 @@ std::string Simulation<D>::checkState(const DiagnosticsRow& row, const double* y
   std::ostringstream os;
   const std::size_t n = system_.particles.n_moving;
   if (!std::isfinite(row.kinetic_energy) || !std::isfinite(row.max_density_deviation)) {
-    for (std::size_t k = 0; k < system_.size(); ++k)
+    for (std::size_t k = 0; k < n * (2 * D + 1); ++k)
       if (!std::isfinite(y[k])) {
         const std::size_t i = k < n * D ? k / D : k < n * (D + 1) ? k - n * D : (k - n * (D + 1)) / D;
         const char* field = k < n * D ? "position" : k < n * (D + 1) ? "density" : "velocity";
         os << "non-finite " << field << " of particle id " << system_.particles.id[i] << " at t = " << row.time << " s";
         return os.str();
       }
-    return "non-finite diagnostics";
+    os << "non-finite evolving field (elastic stress) at t = " << row.time << " s";
+    return os.str();
   }
+  // Evolving fields (elastic stresses) are not in the diagnostics: scan them.
+  const std::size_t total = system_.size();
+  for (std::size_t k = n * (2 * D + 1); k < total; ++k)
+    if (!std::isfinite(y[k])) {
+      os << "non-finite evolving field (elastic stress) at t = " << row.time << " s";
+      return os.str();
+    }
   if (row.max_density_deviation > max_density_deviation_) {
     os << "density deviates from the rest density by " << row.max_density_deviation * 100
        << " % (> checks.max_density_deviation = " << max_density_deviation_ * 100 << " %) at t = " << row.time << " s";

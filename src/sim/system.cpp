@@ -21,10 +21,14 @@ void SphSystem<D>::setup(double spacing, double rest_density, double viscosity, 
       pressure_model_ = m;
     }
   }
-  Setup<D> s{particles, kernel, spacing, rest_density, viscosity, body_acceleration_, pressure_model_};
+  evolving_.clear();
+  Setup<D> s{particles, kernel, spacing, rest_density, viscosity, body_acceleration_, pressure_model_, &evolving_};
   for (auto& b : boundaries) b->setup(s);
   for (auto& e : effects) e->setup(s);
   particles.resizeFields();
+  for (Field* f : evolving_)
+    if (f->range == Field::Range::fixed) throw std::logic_error("field " + f->name + " cannot evolve: it covers fixed particles only");
+  field_rates_.assign(evolving_.size(), nullptr);
 
   state_.clear(); gradients_.clear(); rates_.clear(); forces_.clear(); external_.clear();
   stability_inputs_ = {};
@@ -47,6 +51,13 @@ void SphSystem<D>::setup(double spacing, double rest_density, double viscosity, 
 }
 
 template <int D>
+std::size_t SphSystem<D>::size() const {
+  std::size_t n = particles.n_moving * (2 * D + 1);
+  for (const Field* f : evolving_) n += particles.n_moving * static_cast<std::size_t>(f->components);
+  return n;
+}
+
+template <int D>
 StateSegments SphSystem<D>::segments() const {
   const std::size_t n = particles.n_moving;
   return {0, n * D, n * (D + 1), n * (2 * D + 1)};
@@ -58,6 +69,11 @@ void SphSystem<D>::pack(double* y) const {
   std::memcpy(y, particles.position.data(), sizeof(double) * n * D);
   std::memcpy(y + n * D, particles.density.data(), sizeof(double) * n);
   std::memcpy(y + n * (D + 1), particles.velocity.data(), sizeof(double) * n * D);
+  std::size_t off = n * (2 * D + 1);
+  for (const Field* f : evolving_) {
+    std::memcpy(y + off, f->data.data(), sizeof(double) * n * f->components);
+    off += n * f->components;
+  }
 }
 
 template <int D>
@@ -75,6 +91,11 @@ void SphSystem<D>::unpack(const double* y) {
       v[D * i + a] = y_v[D * i + a];
     }
     rho[i] = y_rho[i];
+  }
+  std::size_t off = n * (2 * D + 1);
+  for (Field* f : evolving_) {
+    std::memcpy(f->data.data(), y + off, sizeof(double) * n * f->components);
+    off += n * f->components;
   }
 }
 
@@ -115,8 +136,14 @@ void SphSystem<D>::evaluate(double t, const double* y, double* ydot) {
     }
     drhodt[i] = 0.0;
   }
+  std::size_t off = n * (2 * D + 1);
+  for (std::size_t k = 0; k < evolving_.size(); ++k) {
+    field_rates_[k] = ydot + off;
+    std::memset(field_rates_[k], 0, sizeof(double) * n * evolving_[k]->components);
+    off += n * evolving_[k]->components;
+  }
 
-  const RhsContext<D> ctx{particles, kernel, domain, t, dxdt, drhodt, dvdt};
+  const RhsContext<D> ctx{particles, kernel, domain, t, dxdt, drhodt, dvdt, field_rates_.data()};
   particlePass(state_, ctx);
   for (auto& b : boundaries) b->update(ctx, neighbours, driver);
   driver.run(ctx, neighbours, gradients_);

@@ -110,7 +110,8 @@ class ArkodeErk final : public Integrator {
       for (std::size_t k = 0; k < nn; ++k) {
         const bool pos = k >= s.position_begin && k < s.position_end;
         const bool vel = k >= s.velocity_begin && k < s.velocity_end;
-        a[k] = pos ? atol_segments_[0] : vel ? atol_segments_[2] : atol_segments_[1];
+        const bool stress = k >= s.velocity_end;
+        a[k] = pos ? atol_segments_[0] : vel ? atol_segments_[2] : stress ? atol_segments_[3] : atol_segments_[1];
       }
       check(ERKStepSVtolerances(mem_, rtol_, atol_), "SVtolerances");
       check(ERKStepSetStabilityFn(mem_, &ArkodeErk::stability, this), "SetStabilityFn");
@@ -214,7 +215,7 @@ class ArkodeErk final : public Integrator {
   ButcherTableInfo table_;
   StepControl control_;
   double rtol_;
-  std::vector<double> atol_segments_;  // position, density, velocity
+  std::vector<double> atol_segments_;  // position, density, velocity, evolving fields (stress)
   double initial_step_;
   SUNContext sunctx_ = nullptr;
   void* mem_ = nullptr;
@@ -251,14 +252,18 @@ std::unique_ptr<Integrator> makeArkode(ConfigTable& cfg, const StepControl& c, c
   const double atol_x = cfg.number("atol_position", rtol * s.spacing, Bound::positive, "m");
   const double atol_rho = cfg.number("atol_density", rtol * s.density * s.density_variation, Bound::positive, "kg/m^3");
   const double atol_v = cfg.number("atol_velocity", rtol * vref, Bound::positive, "m/s");
+  // Elastic stresses (when a model evolves them): rtol times the stress scale the model
+  // declared (polymer viscosity * reference velocity / reference length).
+  const double atol_s = s.stress > 0 ? cfg.number("atol_stress", rtol * s.stress, Bound::positive, "Pa")
+                                     : (cfg.markRead("atol_stress"), 1.0);
   const double h0 = cfg.has("initial_step") ? cfg.number("initial_step", std::nullopt, Bound::positive, "s") : 0.0;
   if (!cfg.has("initial_step")) cfg.markRead("initial_step");
-  return std::make_unique<ArkodeErk>(true, table, c, rtol, std::vector<double>{atol_x, atol_rho, atol_v}, h0);
+  return std::make_unique<ArkodeErk>(true, table, c, rtol, std::vector<double>{atol_x, atol_rho, atol_v, atol_s}, h0);
 }
 
 std::unique_ptr<Integrator> makeArkodeFixed(ConfigTable& cfg, const StepControl& c, const ReferenceScales&) {
   const ButcherTableInfo& table = tableFromConfig(cfg, false);
-  return std::make_unique<ArkodeErk>(false, table, c, 0.0, std::vector<double>{0, 0, 0}, 0.0);
+  return std::make_unique<ArkodeErk>(false, table, c, 0.0, std::vector<double>{0, 0, 0, 0}, 0.0);
 }
 
 }  // namespace vesph

@@ -4,9 +4,10 @@
 //   corrector   r^{n+1}   = r^{n+1/2} + dt/2 v^{n+1},  rho^{n+1} = rho^{n+1/2} + dt/2 k^{n+1}
 // The thesis evaluates f^{n+1/2} with the velocity v^n; here the velocity is predicted to the
 // half step as well (v^{n+1/2} = v^n + dt/2 f^n, f^n from the previous corrector evaluation),
-// which makes the viscous and velocity-dependent forces second order too. Every non-velocity,
-// non-position component (density, and the stresses of later models) follows the density's
-// trapezoidal rule. k^{n+1} is evaluated at (r^{n+1}, rho^{n+1/2}, v^{n+1}): the continuity
+// which makes the viscous and velocity-dependent forces second order too. The evolving fields
+// after the velocities (elastic stresses, whose rates depend on themselves) take the
+// velocity's midpoint update: S^{n+1} = S^n + dt F_S^{n+1/2}. The density follows the
+// trapezoidal rule above. k^{n+1} is evaluated at (r^{n+1}, rho^{n+1/2}, v^{n+1}): the continuity
 // equation (Fang eq. 26) does not depend on density, so it is exact there; the force f^{n+1}
 // from that evaluation (pressure at rho^{n+1/2}) only predicts the next half-step velocity,
 // an O(dt^2) local effect that keeps the scheme second order.
@@ -27,30 +28,27 @@ class Leapfrog final : public FixedStepIntegrator {
     const StateSegments s = sys_->segments();
     double* y = y_;
     double* f = rate_.data();
-    std::vector<double>& v_old = work_;  // holds v^n during the step
+    std::vector<double>& old = work_;  // holds v^n (and S^n) during the step
     // Predictor: everything to the half step.
 #pragma omp parallel for schedule(static) if (n_ >= kParallelMinimum)
     for (std::size_t k = 0; k < n_; ++k) {
-      if (k >= s.velocity_begin && k < s.velocity_end) v_old[k] = y[k];
+      if (k >= s.velocity_begin) old[k] = y[k];
       y[k] += 0.5 * dt * f[k];
     }
     evaluate(t_ + 0.5 * dt, y, f);  // f^{n+1/2}
-    // Velocity: full step from v^n with f^{n+1/2}; positions: corrector with v^{n+1}.
-    const std::size_t nv = s.velocity_end - s.velocity_begin;
-#pragma omp parallel for schedule(static) if (nv >= kParallelMinimum)
-    for (std::size_t k = 0; k < nv; ++k) {
+    // Velocities and evolving fields: full step from the old values with f^{n+1/2};
+    // positions: corrector with v^{n+1}.
+    const std::size_t nm = n_ - s.velocity_begin, nv = s.velocity_end - s.velocity_begin;
+#pragma omp parallel for schedule(static) if (nm >= kParallelMinimum)
+    for (std::size_t k = 0; k < nm; ++k) {
       const std::size_t kv = s.velocity_begin + k;
-      y[kv] = v_old[kv] + dt * f[kv];
-      y[s.position_begin + k] += 0.5 * dt * y[kv];
+      y[kv] = old[kv] + dt * f[kv];
+      if (k < nv) y[s.position_begin + k] += 0.5 * dt * y[kv];
     }
-    // Density (and other fields): keep y^{n+1/2}, evaluate k^{n+1}, then correct.
+    // Density: keep rho^{n+1/2}, evaluate k^{n+1}, then correct.
     evaluate(t_ + dt, y, f);
 #pragma omp parallel for schedule(static) if (n_ >= kParallelMinimum)
-    for (std::size_t k = 0; k < n_; ++k) {
-      const bool kinematic = (k >= s.velocity_begin && k < s.velocity_end) ||
-                             (k >= s.position_begin && k < s.position_end);
-      if (!kinematic) y[k] += 0.5 * dt * f[k];
-    }
+    for (std::size_t k = s.position_end; k < s.velocity_begin; ++k) y[k] += 0.5 * dt * f[k];
   }
 };
 

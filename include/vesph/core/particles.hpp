@@ -20,6 +20,9 @@ struct Field {
   std::string name;
   int components = 1;
   Range range = Range::all;
+  // Wall particles get this field by the normalised SPH interpolation of Fang et al. eq. (46)
+  // from their fluid neighbours (vesph/boundary/dummy_walls.hpp); needs Range::all.
+  bool extrapolated_to_walls = false;
   std::vector<double> data;
 
   double* at(std::size_t k) { return data.data() + k * components; }

@@ -14,6 +14,7 @@
 //   external   per particle: body forces
 #include <span>
 #include <string>
+#include <vector>
 #include <string_view>
 
 #include "vesph/core/kernel.hpp"
@@ -48,6 +49,9 @@ struct RhsContext {
   double* dxdt;    // [n_moving * D]
   double* drhodt;  // [n_moving]
   double* dvdt;    // [n_moving * D]
+  // Rates of the evolving fields (elastic stresses), by the slot Setup::evolve returned;
+  // each [n_moving * components].
+  double* const* field_rates;
 };
 
 // The pressure closure of the scheme (WCSPH: the equation of state). Walls use its
@@ -78,6 +82,16 @@ struct Setup {
   double viscosity;         // dynamic viscosity mu, Pa s
   Vec<D> body_acceleration; // sum of constant body forces, m/s^2
   const PressureModel* pressure_model = nullptr;  // set by the effect that provides one
+  std::vector<Field*>* evolving = nullptr;          // the system's evolving fields
+
+  // Puts the field's moving-particle values into the ODE state (after the velocities);
+  // returns the slot of its rates in RhsContext::field_rates.
+  int evolve(Field& f) {
+    for (std::size_t k = 0; k < evolving->size(); ++k)
+      if ((*evolving)[k] == &f) return static_cast<int>(k);
+    evolving->push_back(&f);
+    return static_cast<int>(evolving->size() - 1);
+  }
 };
 
 template <int D>

@@ -35,7 +35,7 @@ class SphSystem final : public OdeSystem {
   // into their phases. Call once the particles exist.
   void setup(double spacing, double rest_density, double viscosity, double skin);
 
-  std::size_t size() const override { return particles.n_moving * (2 * D + 1); }
+  std::size_t size() const override;
   StateSegments segments() const override;
   void rhs(double t, const double* y, double* ydot) override;
   // The same evaluation without counting it (derived fields for output, tests).
@@ -47,6 +47,7 @@ class SphSystem final : public OdeSystem {
   void unpack(const double* y);
 
   const PressureModel* pressureModel() const { return pressure_model_; }
+  const std::vector<Field*>& evolvingFields() const { return evolving_; }
   Vec<D> bodyAcceleration() const { return body_acceleration_; }
   std::uint64_t rhsEvaluations() const { return rhs_evals_; }
 
@@ -54,6 +55,8 @@ class SphSystem final : public OdeSystem {
   void particlePass(const std::vector<Effect<D>*>& list, const RhsContext<D>& ctx);
 
   std::vector<Effect<D>*> state_, gradients_, rates_, forces_, external_;
+  std::vector<Field*> evolving_;
+  std::vector<double*> field_rates_;
   StabilityInputs stability_inputs_;
   const PressureModel* pressure_model_ = nullptr;
   Vec<D> body_acceleration_ = Vec<D>::Zero();

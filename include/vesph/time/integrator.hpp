@@ -13,7 +13,9 @@
 
 namespace vesph {
 
-// Where positions and velocities sit in the state vector (the leapfrog treats them apart).
+// Where the fields sit in the state vector: positions | densities | velocities | evolving
+// fields (elastic stresses), the last from velocity_end to the end of the state. The leapfrog
+// treats the groups differently; ARKODE gives each group its own absolute tolerance.
 struct StateSegments {
   std::size_t position_begin = 0, position_end = 0;
   std::size_t velocity_begin = 0, velocity_end = 0;
@@ -49,6 +51,7 @@ struct ReferenceScales {
   double density = 1;            // rho0, kg/m^3
   double density_variation = 0.01;  // delta (relative)
   double velocity = 0;           // expected speed, m/s (0: unknown)
+  double stress = 0;             // expected elastic stress, Pa (0: none evolves)
 };
 
 struct StepLimits {
