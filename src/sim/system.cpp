@@ -24,6 +24,11 @@ void SphSystem<D>::setup(double spacing, double rest_density, double viscosity, 
   evolving_.clear();
   Setup<D> s{particles, kernel, spacing, rest_density, viscosity, body_acceleration_, pressure_model_, &evolving_};
   for (auto& b : boundaries) b->setup(s);
+  // Effects are set up in phase order, so that an effect finds the fields of the phases that
+  // run before it (the velocity gradient before the stress model, the stress before its
+  // divergence), whatever the order of the scene.
+  std::stable_sort(effects.begin(), effects.end(),
+                   [](const auto& a, const auto& b) { return a->phase() < b->phase(); });
   for (auto& e : effects) e->setup(s);
   particles.resizeFields();
   for (Field* f : evolving_)
@@ -171,6 +176,8 @@ StabilitySnapshot SphSystem<D>::stability() const {
   StabilitySnapshot s;
   s.h = kernel.h;
   s.sound_speed = stability_inputs_.sound_speed;
+  s.elastic_wave_speed = stability_inputs_.elastic_wave_speed;
+  s.relaxation_time = stability_inputs_.relaxation_time;
   s.kinematic_viscosity = stability_inputs_.kinematic_viscosity;
   s.max_speed = max_speed_;
   s.max_acceleration = max_acceleration_;

@@ -5,14 +5,15 @@
 
 namespace vesph {
 
-double StepLimits::smallest() const { return std::min({acoustic, viscous, force}); }
+double StepLimits::smallest() const { return std::min({acoustic, viscous, force, relaxation}); }
 
 StepLimits stepLimits(const StabilitySnapshot& s, const StepControl& c) {
   StepLimits l;
-  const double signal = s.sound_speed + s.max_speed;
+  const double signal = s.sound_speed + s.elastic_wave_speed + s.max_speed;
   if (signal > 0) l.acoustic = c.cfl * s.h / signal;
   if (s.kinematic_viscosity > 0) l.viscous = c.viscous_coefficient * s.h * s.h / s.kinematic_viscosity;
   if (s.max_acceleration > 0) l.force = c.force_coefficient * std::sqrt(s.h / s.max_acceleration);
+  if (s.relaxation_time > 0) l.relaxation = c.relaxation_coefficient * s.relaxation_time;
   l.acoustic = std::min(l.acoustic, c.max_step);  // max_step (default none) caps every step
   return l;
 }
@@ -40,6 +41,7 @@ std::unique_ptr<Integrator> makeIntegrator(ConfigTable& cfg, const ReferenceScal
   c.cfl = cfg.numberIn("cfl", 0.125, 1e-6, 1.0);
   c.viscous_coefficient = cfg.numberIn("viscous_coefficient", 0.125, 1e-6, 1.0);
   c.force_coefficient = cfg.numberIn("force_coefficient", 0.25, 1e-6, 1.0);
+  c.relaxation_coefficient = cfg.numberIn("relaxation_coefficient", 0.5, 1e-6, 2.0);
   if (cfg.has("max_step")) c.max_step = cfg.number("max_step", std::nullopt, Bound::positive, "s");
   else cfg.markRead("max_step");
   if (cfg.has("step")) c.fixed_step = cfg.number("step", std::nullopt, Bound::positive, "s");

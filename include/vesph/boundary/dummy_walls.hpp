@@ -9,6 +9,10 @@
 // u_w = 0 (walls at rest), a_w = 0, g the scene's body acceleration. A wall particle with no
 // fluid neighbour keeps p0, rho0 and zero velocity. The wall's own velocity (zero) enters the
 // continuity equation; the extrapolated velocity enters the viscous term only.
+// Fields flagged Field::extrapolated_to_walls (elastic and extra stresses) get the normalised
+// SPH interpolation of Fang et al. (2006) eq. (46) from the fluid neighbours:
+//   f_w = sum_f (m_f/rho_f) f_f W_wf / sum_f (m_f/rho_f) W_wf
+// (zero for a wall particle without fluid neighbours).
 #include "vesph/boundary/boundary.hpp"
 
 namespace vesph {
@@ -22,6 +26,8 @@ class DummyWalls final : public Boundary<D> {
 
  private:
   Field* wall_velocity_ = nullptr;
+  std::vector<Field*> interpolated_;
+  bool interpolated_ready_ = false;
   Field* pressure_ = nullptr;
   const PressureModel* model_ = nullptr;
   Vec<D> g_ = Vec<D>::Zero();

@@ -71,6 +71,8 @@ struct PressureModel {
 struct StabilityInputs {
   double sound_speed = 0;          // max over particles, m/s
   double kinematic_viscosity = 0;  // max, m^2/s
+  double elastic_wave_speed = 0;   // sqrt(G/rho) of elastic models, m/s
+  double relaxation_time = 0;      // shortest relaxation time, s (0: none)
 };
 
 template <int D>

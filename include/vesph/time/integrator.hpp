@@ -28,12 +28,17 @@ struct StabilitySnapshot {
   double max_speed = 0;            // max |v| over moving particles, m/s
   double kinematic_viscosity = 0;  // m^2/s
   double max_acceleration = 0;     // max |dv/dt| over moving particles, m/s^2
+  double elastic_wave_speed = 0;   // sqrt(G/rho) of elastic models, m/s
+  double relaxation_time = 0;      // shortest relaxation time of elastic models, s (0: none)
 };
 
 // Coefficients of the limits, scene keys of [integrator]:
-//   acoustic (CFL):  dt <= cfl * h / (c + v_max)              thesis 3.5, Fang eq. (51)
+//   acoustic (CFL):  dt <= cfl * h / (c + c_e + v_max)        thesis 3.5, Fang eq. (51);
+//                    c_e = sqrt(G/rho) the elastic shear-wave speed of viscoelastic models
 //   viscous:         dt <= viscous_coefficient * h^2 / nu       Fang eq. (53)
 //   force:           dt <= force_coefficient * sqrt(h / a_max)  Fang eq. (52)
+//   relaxation:      dt <= relaxation_coefficient * lambda      explicit stability of the
+//                    stress relaxation -S/lambda (stable up to dt = 2 lambda for 2nd-order schemes)
 // fixed_step (integrator.step), when set, makes the fixed-step integrators take exactly that
 // step (shortened only to land on output times) instead of the stability limit: for temporal
 // convergence studies; the limits are not applied then.
@@ -41,6 +46,7 @@ struct StepControl {
   double cfl = 0.125;
   double viscous_coefficient = 0.125;
   double force_coefficient = 0.25;
+  double relaxation_coefficient = 0.5;
   double max_step = std::numeric_limits<double>::infinity();
   double fixed_step = 0.0;
 };
@@ -58,6 +64,7 @@ struct StepLimits {
   double acoustic = std::numeric_limits<double>::infinity();
   double viscous = std::numeric_limits<double>::infinity();
   double force = std::numeric_limits<double>::infinity();
+  double relaxation = std::numeric_limits<double>::infinity();
   double smallest() const;
 };
 StepLimits stepLimits(const StabilitySnapshot& s, const StepControl& c);

@@ -1,0 +1,105 @@
+#pragma once
+// Constitutive models (seed thesis §2.3; Fang et al. 2006 §2; Xu et al. 2013).
+//
+// A model is a pure rate function (DESIGN.md "Style"): given the velocity gradient
+// kappa (kappa_ab = dv_a/dx_b, Fang eq. 23) and its own elastic stress S, it returns dS/dt.
+// No time step, no half steps: the integrator owns time. ConstitutiveEffect<D, Model> turns a
+// model into an effect: it registers the elastic stress as an evolving field of the ODE state
+// (so a Newtonian scene carries none), reads the velocity gradient, calls the model for every
+// moving particle and writes the full extra stress T = S + eta_s (kappa + kappa^T) for output.
+// Adding a model: one file with a struct deriving from ConstitutiveEffect, one registration
+// line in src/physics/registry.cpp.
+//
+// Symmetric tensors are stored as 3 components in 2D (xx, xy, yy) and 6 in 3D
+// (xx, xy, xz, yy, yz, zz), the order of the output's extra_stress.
+#include <Eigen/Dense>
+
+#include "vesph/io/config.hpp"
+#include "vesph/physics/effect.hpp"
+
+namespace vesph {
+
+template <int D>
+using Mat = Eigen::Matrix<double, D, D>;
+
+template <int D>
+constexpr int symmetricComponents() {
+  return D == 2 ? 3 : 6;
+}
+
+template <int D>
+Mat<D> unpackSymmetric(const double* s) {
+  Mat<D> m;
+  if constexpr (D == 2) {
+    m << s[0], s[1], s[1], s[2];
+  } else {
+    m << s[0], s[1], s[2], s[1], s[3], s[4], s[2], s[4], s[5];
+  }
+  return m;
+}
+
+template <int D>
+void packSymmetric(const Mat<D>& m, double* s) {
+  if constexpr (D == 2) {
+    s[0] = m(0, 0); s[1] = 0.5 * (m(0, 1) + m(1, 0)); s[2] = m(1, 1);
+  } else {
+    s[0] = m(0, 0); s[1] = 0.5 * (m(0, 1) + m(1, 0)); s[2] = 0.5 * (m(0, 2) + m(2, 0));
+    s[3] = m(1, 1); s[4] = 0.5 * (m(1, 2) + m(2, 1)); s[5] = m(2, 2);
+  }
+}
+
+// Base of the models that evolve an elastic stress S. Model supplies
+//   Mat<D> rate(const Mat<D>& kappa, const Mat<D>& S) const     dS/dt
+//   double polymerViscosity() const, double relaxationTime() const  (scales, stability)
+template <int D, class Model>
+class ConstitutiveEffect : public Effect<D> {
+ public:
+  Phase phase() const override { return Phase::rates; }
+
+  void setup(Setup<D>& s) override {
+    const Field* kappa = s.particles.fields.find("velocity_gradient");
+    if (!kappa)
+      throw InputError("effects." + std::string(this->name()) +
+                       " needs the velocity gradient: add [effects.velocity_gradient]");
+    kappa_ = kappa;
+    stress_ = &s.particles.fields.require("elastic_stress", symmetricComponents<D>());
+    stress_->extrapolated_to_walls = true;  // Fang eq. (46) on wall particles
+    slot_ = s.evolve(*stress_);
+    extra_ = &s.particles.fields.require("extra_stress", symmetricComponents<D>());
+    extra_->extrapolated_to_walls = true;
+    solvent_viscosity_ = s.viscosity;
+    rho0_ = s.rest_density;
+  }
+
+  void stability(StabilityInputs& in) const override {
+    const Model& m = static_cast<const Model&>(*this);
+    const double lambda = m.relaxationTime();
+    // Elastic shear waves travel at sqrt(G/rho), G = eta_p/lambda.
+    if (lambda > 0) in.elastic_wave_speed = std::max(in.elastic_wave_speed, std::sqrt(m.polymerViscosity() / (lambda * rho0_)));
+    if (lambda > 0) in.relaxation_time = in.relaxation_time > 0 ? std::min(in.relaxation_time, lambda) : lambda;
+  }
+
+  void particles(const RhsContext<D>& ctx, std::size_t begin, std::size_t end) const override {
+    const Model& m = static_cast<const Model&>(*this);
+    const double* k = kappa_->data.data();
+    const double* S = stress_->data.data();
+    double* dS = ctx.field_rates[slot_];
+    double* T = extra_->data.data();
+    constexpr int nc = symmetricComponents<D>();
+    for (std::size_t i = begin; i < end; ++i) {
+      const Eigen::Map<const Eigen::Matrix<double, D, D, Eigen::RowMajor>> kappa(k + D * D * i);
+      const Mat<D> Si = unpackSymmetric<D>(S + nc * i);
+      packSymmetric<D>(m.rate(kappa, Si), dS + nc * i);
+      packSymmetric<D>(Si + solvent_viscosity_ * (kappa + kappa.transpose()), T + nc * i);
+    }
+  }
+
+ private:
+  const Field* kappa_ = nullptr;
+  Field* stress_ = nullptr;
+  Field* extra_ = nullptr;
+  int slot_ = -1;
+  double solvent_viscosity_ = 0, rho0_ = 1;
+};
+
+}  // namespace vesph

@@ -1,0 +1,55 @@
+// Divergence of the elastic stress in the momentum equation, Fang et al. (2006) eq. (27) for
+// the elastic part S of sigma = -p I + 2 eta_s D + S (the pressure and solvent parts are the
+// pressure_gradient and viscosity effects):
+//   dv_i^a/dt += sum_j m_j (S_i^{ab}/rho_i^2 + S_j^{ab}/rho_j^2) dW_ij/dx_i^b
+// Antisymmetric in i, j: conserves linear momentum. Wall particles carry the stress
+// extrapolated from the fluid (Fang eq. 46).
+#include "vesph/physics/constitutive.hpp"
+#include "vesph/physics/registry.hpp"
+
+namespace vesph {
+namespace {
+
+template <int D>
+class StressDivergence final : public PairEffect<D, StressDivergence<D>> {
+ public:
+  explicit StressDivergence(ConfigTable&) {}
+  std::string_view name() const override { return "stress_divergence"; }
+  Phase phase() const override { return Phase::forces; }
+
+  void setup(Setup<D>& s) override {
+    stress_ = s.particles.fields.find("elastic_stress");
+    if (!stress_)
+      throw InputError("effects.stress_divergence needs an elastic stress, which no effect of this scene evolves: "
+                       "add a constitutive model such as [effects.oldroyd_b]");
+  }
+
+  struct Local {
+    Vec<D> acc;
+    Mat<D> Si_over_rho2;
+    const double* S;
+    const double* rho;
+    const double* m;
+  };
+  Local begin(const RhsContext<D>& ctx, Index i) const {
+    const ParticleSet<D>& p = ctx.particles;
+    const double rho = p.density[i];
+    return {Vec<D>::Zero(), unpackSymmetric<D>(stress_->data.data() + symmetricComponents<D>() * i) / (rho * rho),
+            stress_->data.data(), p.density.data(), p.mass.data()};
+  }
+  void pair(const RhsContext<D>&, Index, const Neighbour<D>& nb, Local& l) const {
+    const double inv_rho = 1.0 / l.rho[nb.j];
+    const Mat<D> Sj = unpackSymmetric<D>(l.S + symmetricComponents<D>() * nb.j);
+    l.acc += (l.m[nb.j] * nb.F) * ((l.Si_over_rho2 + Sj * (inv_rho * inv_rho)) * nb.rij);
+  }
+  void end(const RhsContext<D>& ctx, Index i, Local& l) const {
+    for (int a = 0; a < D; ++a) ctx.dvdt[D * i + a] += l.acc[a];
+  }
+
+ private:
+  const Field* stress_ = nullptr;
+};
+
+}  // namespace
+VESPH_EFFECT_FACTORY(makeStressDivergence, StressDivergence)
+}  // namespace vesph
