@@ -6,7 +6,7 @@
 // (total viscosity eta, lambda_1, lambda_2): lambda = lambda_1, eta_p = eta (1 - lambda_2/lambda_1),
 // eta_s = eta lambda_2/lambda_1. UCM is lambda_2 = 0: no solvent (fluid.viscosity = 0, no
 // [effects.viscosity]).
-#include "vesph/physics/constitutive.hpp"
+#include "vesph/physics/constitutive/oldroyd_b.hpp"
 #include "vesph/physics/registry.hpp"
 
 namespace vesph {
@@ -16,8 +16,8 @@ template <int D>
 class OldroydB : public ConstitutiveEffect<D, OldroydB<D>> {
  public:
   explicit OldroydB(ConfigTable& cfg, bool ucm = false) : ucm_(ucm) {
-    lambda_ = cfg.number("relaxation_time", std::nullopt, Bound::positive, "s");
-    eta_p_ = cfg.number("polymer_viscosity", std::nullopt, Bound::positive, "Pa s");
+    rate_.lambda = cfg.number("relaxation_time", std::nullopt, Bound::positive, "s");
+    rate_.eta_p = cfg.number("polymer_viscosity", std::nullopt, Bound::positive, "Pa s");
   }
   std::string_view name() const override { return ucm_ ? "ucm" : "oldroyd_b"; }
 
@@ -28,15 +28,16 @@ class OldroydB : public ConstitutiveEffect<D, OldroydB<D>> {
     ConstitutiveEffect<D, OldroydB<D>>::setup(s);
   }
 
-  Mat<D> rate(const Mat<D>& kappa, const Mat<D>& S) const {
-    return kappa * S + S * kappa.transpose() - S / lambda_ + (eta_p_ / lambda_) * (kappa + kappa.transpose());
+  template <class K>
+  Mat<D> rate(const K& kappa, const Mat<D>& S) const {
+    return rate_.template operator()<D>(kappa, S);
   }
-  double polymerViscosity() const { return eta_p_; }
-  double relaxationTime() const { return lambda_; }
+  double polymerViscosity() const { return rate_.eta_p; }
+  double relaxationTime() const { return rate_.lambda; }
 
  private:
   bool ucm_;
-  double lambda_ = 1, eta_p_ = 0;
+  OldroydBRate rate_;
 };
 
 template <int D>
