@@ -65,6 +65,7 @@ class EquationOfState final : public Effect<D>, public PressureModel {
   double soundSpeed() const override { return c_; }
   double designDensityVariation() const override { return from_rule_ ? delta_ : 0.0; }
   double designVelocity() const override { return from_rule_ ? velocity_ : 0.0; }
+  double designLength() const override { return from_rule_ ? length_ : 0.0; }
 
  private:
   double p0_ = 0, c_ = 0, rho0_ = 1;

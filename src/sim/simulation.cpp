@@ -114,6 +114,11 @@ Simulation<D>::Simulation(Config& config, const SceneHeader& header) : config_(c
     if (m->designDensityVariation() > 0) scales.density_variation = m->designDensityVariation();
     scales.velocity = m->designVelocity() > 0 ? m->designVelocity() : 0.1 * m->soundSpeed();
   }
+  {
+    const PressureModel* m = system_.pressureModel();
+    const double length = m && m->designLength() > 0 ? m->designLength() : 40 * dx_;
+    for (const auto& e : system_.effects) scales.stress = std::max(scales.stress, e->stressScale(scales.velocity, length));
+  }
   ConfigTable integ = root.table("integrator");
   integrator_ = makeIntegrator(integ, scales);
   integrator_name_ = integrator_->name();

@@ -79,6 +79,10 @@ class ConstitutiveEffect : public Effect<D> {
     if (lambda > 0) in.relaxation_time = in.relaxation_time > 0 ? std::min(in.relaxation_time, lambda) : lambda;
   }
 
+  double stressScale(double velocity, double length) const override {
+    return static_cast<const Model&>(*this).polymerViscosity() * velocity / length;
+  }
+
   void particles(const RhsContext<D>& ctx, std::size_t begin, std::size_t end) const override {
     const Model& m = static_cast<const Model&>(*this);
     const double* k = kappa_->data.data();

@@ -65,6 +65,7 @@ struct PressureModel {
   // and the flow speed it was chosen for (V of eq. 3.38); 0 when the sound speed was given.
   virtual double designDensityVariation() const = 0;
   virtual double designVelocity() const = 0;
+  virtual double designLength() const = 0;
 };
 
 // What effects tell the integrators about explicit stability (Fang eqs. 51-53, thesis 3.5).
@@ -113,6 +114,9 @@ class Effect {
   // If this effect is the scheme's pressure closure, return it.
   virtual const PressureModel* pressureModel() const { return nullptr; }
   virtual void stability(StabilityInputs& in) const {}
+  // The scale of the stress an evolving model produces at velocity V over length L (Pa), for
+  // default error-control tolerances; 0 when the effect evolves no stress.
+  virtual double stressScale(double velocity, double length) const { return 0.0; }
 
   // Per-particle effects: moving particles [begin, end).
   virtual void particles(const RhsContext<D>& ctx, std::size_t begin, std::size_t end) const {}
