@@ -26,8 +26,8 @@ What this module provides
 * temporal_error(run, ref, t): max over fluid particles, matched by id, of
   |vx - vx_ref| / (F H^2/(8 nu)).
 * step_limits(...), step_control(run): the explicit stability limits of theory.md
-  section 8, and how an adaptive run's steps relate to them (at the limit, held just below
-  it by ARKODE's step-change deadband, or set by the error estimate); the step sizes are the
+  section 8, and how an adaptive run's steps relate to them (at the limit, held at a
+  constant step just below it, or set by the error estimate); the step sizes are the
   differences of the diagnostics `time` column.
 * write_csv, print_table, plot helpers.
 
@@ -56,7 +56,7 @@ REPO = TOOLS.parent
 if str(TOOLS) not in sys.path:
     sys.path.insert(0, str(TOOLS))
 
-from poiseuille_check import analytic_velocity, scene_parameters  # noqa: E402
+from poiseuille_check import _as_str, analytic_velocity, scene_parameters  # noqa: E402
 
 DEFAULT_VESPH = REPO / "build-dev" / "vesph"
 DEFAULT_SCENE = REPO / "cases" / "poiseuille_newtonian.toml"
@@ -215,21 +215,12 @@ class Run:
         return best
 
     def step_sizes(self):
-        """Accepted step sizes, s, from the diagnostics `time` column (the `dt` column of
-        arkode runs is the previous step's size in this version, so it is not used)."""
+        """Accepted step sizes, s, from the diagnostics `time` column.  They equal the `dt`
+        column of current builds; builds before commit ac193f7 wrote the previous step's
+        size into the `dt` column of arkode runs, so the differences are used instead."""
         if self.diag_time is None or len(self.diag_time) == 0:
             return np.zeros(0)
         return np.diff(np.concatenate([[0.0], self.diag_time]))
-
-
-def _as_str(v):
-    if isinstance(v, bytes):
-        return v.decode("utf-8")
-    if isinstance(v, np.ndarray) and v.shape == ():
-        return _as_str(v[()])
-    if isinstance(v, np.bytes_):
-        return bytes(v).decode("utf-8")
-    return str(v)
 
 
 def read_output(run, directory):
@@ -407,9 +398,10 @@ def step_control(run, cfl=0.125, viscous=0.125, rtol=1e-3):
       control   "limit"  when at_limit >= 0.5 (the stability limit sets the step);
                 "held"   when at least half of the steps have one and the same size, between
                          limit/1.5 and the limit: ARKODE keeps the step when the change its
-                         controller proposes is a growth by less than 1.5 (its default
-                         fixed-step bounds [1, 1.5]), so the step stays just below the limit
-                         although the error estimate would allow the limit;
+                         controller proposes is a growth by less than 1.5 with its default
+                         fixed-step bounds [1, 1.5], so the step stays just below the limit
+                         although the error estimate would allow the limit.  vesph sets the
+                         bounds to [1, 1] since commit ac193f7: "held" now flags a regression;
                 "error"  otherwise (the error estimate sets the step).
     The first and the last step (start-up, landing on the end time) are not counted."""
     dts = run.step_sizes()

@@ -22,8 +22,8 @@ produces.
 Per run: c, the stability limits (theory.md section 8, v_max = 0; h = 4e-5 m):
 acoustic 0.125 h/c, viscous 0.125 h^2/nu = 2e-4 s, and which is smaller; the measured mean
 step t_end/steps; for arkode the fraction of steps at the stability limit, the median
-step / limit and the step control ("limit", "held" just below it by ARKODE's step-change
-deadband, or "error"; see study_common.step_control); max density deviation
+step / limit and the step control ("limit", "held" at a constant step just below it, or
+"error"; see study_common.step_control); max density deviation
 max |rho/rho0 - 1| over the run (summary.json) and its ratio to delta; error vs analytic at
 t_end (max |vx - v| / (F H^2/(8 nu))); wall time, steps, rhs evaluations.  It fits the
 slope of log(density deviation) against log(delta) per integrator (expected 1, since
@@ -119,7 +119,8 @@ def main(argv=None):
           "limit = the smaller one")
     print("arkode: at limit = fraction of steps equal to the stability limit, dt/limit = median "
           "step / limit, control: 'limit' = the stability limit\n  sets the step, 'held' = a "
-          "constant step between limit/1.5 and the limit (ARKODE's fixed-step bounds), "
+          "constant step between limit/1.5 and the limit (not expected: vesph sets ARKODE's "
+          "fixed-step bounds to [1, 1]), "
           "'error' = the error estimate\n")
     sc.print_table(rows, COLUMNS)
     print()

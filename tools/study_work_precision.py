@@ -29,9 +29,9 @@ against wall time (summary.json wall_seconds) and rhs evaluations (rhs_evals).  
 ARKODE runs it reports the fraction of accepted steps that were as long as the stability
 limit (at_limit; steps equal to min(cfl h/(c+vmax), 0.125 h^2/nu) within 0.1 %), the median
 step / limit, and "control" (study_common.step_control): "limit" (the stability limit sets
-the step), "held" (the step is constant just below the limit: ARKODE does not grow a step
-by less than 1.5x, its default fixed-step bounds, so the error estimate is not what sets it
-either) or "error" (the error estimate sets the step).
+the step), "held" (the step is constant just below the limit: ARKODE's default fixed-step
+bounds [1, 1.5] do not grow a step by less than 1.5x; vesph sets them to [1, 1] since commit
+ac193f7, so this should no longer occur) or "error" (the error estimate sets the step).
 
 Writes DIR/work_precision.csv, DIR/work_precision.png (2x2 log-log panels: both errors
 against wall time and against rhs evaluations, one series per integrator/table; ARKODE
@@ -147,8 +147,8 @@ def main(argv=None):
           f"arkode-fixed DORMAND_PRINCE_7_4_5 at step {ref_step:g} s")
     print("ARKODE step control: at limit = fraction of steps equal to the stability limit, "
           "dt/limit = median step / limit;\n  control: 'limit' = the stability limit sets the "
-          "step; 'held' = one constant step between limit/1.5 and the limit (ARKODE keeps\n"
-          "  a step whose proposed growth is below 1.5x, its default fixed-step bounds); "
+          "step; 'held' = one constant step between limit/1.5 and the limit (ARKODE's\n"
+          "  default fixed-step bounds [1, 1.5]; vesph sets [1, 1], so not expected); "
           "'error' = the error estimate sets the step\n")
     sc.print_table(rows, COLUMNS)
 
