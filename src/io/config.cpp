@@ -191,6 +191,14 @@ double ConfigTable::number(std::string_view key, std::optional<double> def, Boun
   return *v;
 }
 
+std::optional<double> ConfigTable::optionalNumber(std::string_view key, Bound bound, std::string_view unit) {
+  if (!t_->contains(key)) {
+    markRead(key);
+    return std::nullopt;
+  }
+  return number(key, std::nullopt, bound, unit);
+}
+
 double ConfigTable::numberIn(std::string_view key, std::optional<double> def, double lo, double hi,
                              std::string_view unit) {
   std::ostringstream what;

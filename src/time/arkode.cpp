@@ -250,9 +250,7 @@ std::unique_ptr<Integrator> makeArkode(ConfigTable& cfg, const StepControl& c, c
   const double rtol = cfg.numberIn("rtol", 1e-4, 1e-14, 0.5);
   // Default absolute tolerances: rtol times the scale of each field (dx for positions,
   // rho0*delta for densities, the reference velocity for velocities).
-  double vref = s.velocity;
-  if (cfg.has("reference_velocity")) vref = cfg.number("reference_velocity", std::nullopt, Bound::positive, "m/s");
-  else cfg.markRead("reference_velocity");
+  const double vref = cfg.optionalNumber("reference_velocity", Bound::positive, "m/s").value_or(s.velocity);
   if (!(vref > 0) && !cfg.has("atol_velocity"))
     cfg.fail("reference_velocity", "the expected flow speed in m/s (for the default velocity tolerance atol_velocity = rtol * reference_velocity); "
                                    "no sound-speed rule gives one in this scene");
@@ -261,10 +259,11 @@ std::unique_ptr<Integrator> makeArkode(ConfigTable& cfg, const StepControl& c, c
   const double atol_v = cfg.number("atol_velocity", rtol * vref, Bound::positive, "m/s");
   // Elastic stresses (when a model evolves them): rtol times the stress scale the model
   // declared (polymer viscosity * reference velocity / reference length).
-  const double atol_s = s.stress > 0 ? cfg.number("atol_stress", rtol * s.stress, Bound::positive, "Pa")
-                                     : (cfg.markRead("atol_stress"), 1.0);
-  const double h0 = cfg.has("initial_step") ? cfg.number("initial_step", std::nullopt, Bound::positive, "s") : 0.0;
-  if (!cfg.has("initial_step")) cfg.markRead("initial_step");
+  double atol_s = 1.0;  // unused when no stress evolves
+  if (s.stress > 0) atol_s = cfg.number("atol_stress", rtol * s.stress, Bound::positive, "Pa");
+  else if (cfg.optionalNumber("atol_stress", Bound::positive, "Pa"))
+    cfg.fail("atol_stress", "no atol_stress: no effect of this scene evolves a stress");
+  const double h0 = cfg.optionalNumber("initial_step", Bound::positive, "s").value_or(0.0);
   return std::make_unique<ArkodeErk>(true, table, c, rtol, std::vector<double>{atol_x, atol_rho, atol_v, atol_s}, h0);
 }
 

@@ -42,10 +42,8 @@ std::unique_ptr<Integrator> makeIntegrator(ConfigTable& cfg, const ReferenceScal
   c.viscous_coefficient = cfg.numberIn("viscous_coefficient", 0.125, 1e-6, 1.0);
   c.force_coefficient = cfg.numberIn("force_coefficient", 0.25, 1e-6, 1.0);
   c.relaxation_coefficient = cfg.numberIn("relaxation_coefficient", 0.5, 1e-6, 2.0);
-  if (cfg.has("max_step")) c.max_step = cfg.number("max_step", std::nullopt, Bound::positive, "s");
-  else cfg.markRead("max_step");
-  if (cfg.has("step")) c.fixed_step = cfg.number("step", std::nullopt, Bound::positive, "s");
-  else cfg.markRead("step");
+  c.max_step = cfg.optionalNumber("max_step", Bound::positive, "s").value_or(c.max_step);
+  c.fixed_step = cfg.optionalNumber("step", Bound::positive, "s").value_or(0.0);
   if (c.fixed_step > 0 && type == "arkode")
     cfg.fail("step", "no fixed step for the adaptive integrator 'arkode' (use 'arkode-fixed', or initial_step)");
   for (const auto& e : integratorRegistry())

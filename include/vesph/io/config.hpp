@@ -57,6 +57,8 @@ class ConfigTable {
 
   double number(std::string_view key, std::optional<double> def, Bound bound = Bound::any,
                 std::string_view unit = "");
+  // A number without a default: std::nullopt when the key is absent (nothing is inserted).
+  std::optional<double> optionalNumber(std::string_view key, Bound bound = Bound::any, std::string_view unit = "");
   double numberIn(std::string_view key, std::optional<double> def, double lo, double hi,
                   std::string_view unit = "");
   long long integer(std::string_view key, std::optional<long long> def, long long lo, long long hi);
