@@ -109,16 +109,15 @@ Simulation<D>::Simulation(Config& config, const SceneHeader& header) : config_(c
   // The integrator, with the scales for default tolerances: the sound-speed rule's design
   // velocity and density variation when the scene used it; else Mach 0.1 of the given sound
   // speed and delta = 0.01.
+  // The stress scale of evolving models uses the rule's length, else 40 dx.
   ReferenceScales scales{dx_, rho0_, 0.01, 0.0};
+  double length = 40 * dx_;
   if (const PressureModel* m = system_.pressureModel()) {
     if (m->designDensityVariation() > 0) scales.density_variation = m->designDensityVariation();
     scales.velocity = m->designVelocity() > 0 ? m->designVelocity() : 0.1 * m->soundSpeed();
+    if (m->designLength() > 0) length = m->designLength();
   }
-  {
-    const PressureModel* m = system_.pressureModel();
-    const double length = m && m->designLength() > 0 ? m->designLength() : 40 * dx_;
-    for (const auto& e : system_.effects) scales.stress = std::max(scales.stress, e->stressScale(scales.velocity, length));
-  }
+  for (const auto& e : system_.effects) scales.stress = std::max(scales.stress, e->stressScale(scales.velocity, length));
   ConfigTable integ = root.table("integrator");
   integrator_ = makeIntegrator(integ, scales);
   integrator_name_ = integrator_->name();
@@ -267,10 +266,9 @@ std::string Simulation<D>::checkState(const DiagnosticsRow& row, const double* y
         os << "non-finite " << field << " of particle id " << system_.particles.id[i] << " at t = " << row.time << " s";
         return os.str();
       }
-    os << "non-finite evolving field (elastic stress) at t = " << row.time << " s";
-    return os.str();
   }
-  // Evolving fields (elastic stresses) are not in the diagnostics: scan them.
+  // Evolving fields (elastic stresses) are not in the diagnostics: scan them (this also names
+  // the cause when the diagnostics are non-finite but positions, densities, velocities are not).
   const std::size_t total = system_.size();
   for (std::size_t k = n * (2 * D + 1); k < total; ++k)
     if (!std::isfinite(y[k])) {
@@ -442,8 +440,8 @@ RunReport Simulation<D>::run(const RunOptions& opt) {
   if (!opt.output_dir.empty()) {
     try {
       writeSummary(opt.output_dir, s);
-    } catch (const std::exception& e) {
-      if (status == RunStatus::ok) throw;
+    } catch (const std::exception&) {
+      if (status == RunStatus::ok) throw;  // a failed run's own error is the one to report
     }
   }
   return report;

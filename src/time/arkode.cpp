@@ -163,11 +163,10 @@ class ArkodeErk final : public Integrator {
   IntegratorStats stats() const override {
     IntegratorStats s;
     if (!mem_) return s;
-    long steps = 0, attempts = 0, nfe = 0, fails = 0;
+    long steps = 0, attempts = 0, nfe = 0;
     ERKStepGetNumSteps(mem_, &steps);
     ERKStepGetNumStepAttempts(mem_, &attempts);
     ERKStepGetNumRhsEvals(mem_, &nfe);
-    ERKStepGetNumErrTestFails(mem_, &fails);
     s.steps = static_cast<std::uint64_t>(steps);
     s.rejected_steps = static_cast<std::uint64_t>(attempts - steps);
     s.rhs_evals = static_cast<std::uint64_t>(nfe);
