@@ -25,7 +25,8 @@ What is checked
     (integer), times non-decreasing; every frame has id uint64 [N],
     kind uint8 [N] (values 0..3), position/velocity float64 [N,dim],
     density/mass/pressure float64 [N], optional extra_stress float64
-    [N,3] (2D) / [N,6] (3D) and free_surface uint8 [N]; ids are unique and
+    [N,3] (2D) / [N,6] (3D), extra_stress_zz float64 [N] (2D) and
+    free_surface uint8 [N]; ids are unique and
     floating-point data are finite; /diagnostics has the float64 1-D
     columns time, dt, kinetic_energy, mass, max_speed,
     max_density_deviation, all of one length.
@@ -68,7 +69,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 DEFAULT_DTD = os.path.join(HERE, "xdmf3.dtd")
 
 MANDATORY = ["id", "kind", "position", "velocity", "density", "mass", "pressure"]
-OPTIONAL = ["extra_stress", "free_surface"]
+OPTIONAL = ["extra_stress", "extra_stress_zz", "free_surface"]
 DIAGNOSTICS = ["time", "dt", "kinetic_energy", "mass", "max_speed",
                "max_density_deviation"]
 TIME_RTOL = 1e-12
@@ -234,6 +235,7 @@ def check_h5(path, rep):
                     "density": ("float64", (N,)), "mass": ("float64", (N,)),
                     "pressure": ("float64", (N,)),
                     "extra_stress": ("float64", (N, 3 if dim == 2 else 6)),
+                    "extra_stress_zz": ("float64", (N,)),  # 2D, models with tau_zz (XPP)
                     "free_surface": ("uint8", (N,)),
                 }
                 for ds in MANDATORY + OPTIONAL:

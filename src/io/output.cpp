@@ -142,7 +142,7 @@ void OutputWriter<D>::writeFrame(double time, std::int64_t step, const ParticleS
   dataset(g, "velocity", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, p.velocity.data(), n, D);
   dataset(g, "density", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, p.density.data(), n, 0);
   dataset(g, "mass", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, p.mass.data(), n, 0);
-  FrameInfo info{name, time, n, false, false, false};
+  FrameInfo info{name, time, n, false, false, false, false};
   if (const Field* f = p.fields.find("pressure"); f && f->range == Field::Range::all) {
     dataset(g, "pressure", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, f->data.data(), n, 0);
     info.pressure = true;
@@ -150,6 +150,12 @@ void OutputWriter<D>::writeFrame(double time, std::int64_t step, const ParticleS
   if (const Field* f = p.fields.find("extra_stress"); f && f->range == Field::Range::all) {
     dataset(g, "extra_stress", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, f->data.data(), n, f->components);
     info.stress = true;
+  }
+  // 2D models with an out-of-plane stress (XPP, constitutive.hpp): T_zz = S_zz in planar flow
+  // (D_zz = 0, so the solvent adds nothing).
+  if (const Field* f = p.fields.find("elastic_stress_zz"); D == 2 && f && f->range == Field::Range::all) {
+    dataset(g, "extra_stress_zz", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, f->data.data(), n, 0);
+    info.stress_zz = true;
   }
   if (const Field* f = p.fields.find("free_surface"); f && f->range == Field::Range::all) {
     std::vector<std::uint8_t> flag(n);
@@ -199,6 +205,7 @@ void OutputWriter<D>::writeXdmf() const {
     attribute("kind", "Scalar", 0, "UChar", 1);
     if (f.pressure) attribute("pressure", "Scalar", 0, "Float", 8);
     if (f.stress) attribute("extra_stress", "Matrix", D == 2 ? 3 : 6, "Float", 8);
+    if (f.stress_zz) attribute("extra_stress_zz", "Scalar", 0, "Float", 8);
     if (f.free_surface) attribute("free_surface", "Scalar", 0, "UChar", 1);
     x << "   </Grid>\n";
   }

@@ -8,6 +8,11 @@
 //     (|m - 1| ~ 5e-4 for the quintic kernel at h = 1.6 dx, tests/test_operators.cpp);
 //     not momentum conserving.
 // Wall particles carry the pressure and density given them by the wall treatment.
+// free_surface_mirror = true (needs [effects.free_surface]): for a particle flagged on the free
+// surface, the zero-pressure condition by mirrored dummy particles, thesis eq. (4.1): with
+// p_i = 0 and a mirror image of every neighbour carrying -p_j,
+//       dv_i/dt = - (2/rho_i) sum_j (m_j/rho_j) p_j grad_i W_ij
+// in place of the form above.
 #include "vesph/physics/registry.hpp"
 
 namespace vesph {
@@ -17,20 +22,29 @@ template <int D>
 class PressureGradient final : public PairEffect<D, PressureGradient<D>> {
  public:
   explicit PressureGradient(ConfigTable& cfg)
-      : symmetric_(cfg.choice("form", "symmetric", {"symmetric", "difference"}) == "symmetric") {}
+      : symmetric_(cfg.choice("form", "symmetric", {"symmetric", "difference"}) == "symmetric"),
+        mirror_(cfg.boolean("free_surface_mirror", false)) {}
   std::string_view name() const override { return "pressure_gradient"; }
   Phase phase() const override { return Phase::forces; }
+  std::string_view form() const override { return symmetric_ ? "symmetric" : "difference"; }
 
   void setup(Setup<D>& s) override {
     pressure_ = s.particles.fields.find("pressure");
     if (!pressure_)
       throw InputError("effects.pressure_gradient needs the particle pressure, which nothing in this "
                        "scene provides: add [effects.equation_of_state] (weakly compressible SPH)");
+    if (mirror_) {
+      surface_ = s.particles.fields.find("free_surface");
+      if (!surface_)
+        throw InputError("effects.pressure_gradient.free_surface_mirror needs the free-surface flags: add "
+                         "[effects.free_surface]");
+    }
   }
 
   // Array pointers live in the accumulator so that the pair loop keeps them in registers.
   struct Local {
     Vec<D> acc;
+    bool surface;
     double pi, rhoi, pi_over_rho2;
     const double* p;
     const double* rho;
@@ -39,12 +53,14 @@ class PressureGradient final : public PairEffect<D, PressureGradient<D>> {
   Local begin(const RhsContext<D>& ctx, Index i) const {
     const ParticleSet<D>& ps = ctx.particles;
     const double p = pressure_->data[i], rho = ps.density[i];
-    return {Vec<D>::Zero(), p, rho, p / (rho * rho), pressure_->data.data(), ps.density.data(), ps.mass.data()};
+    const bool surface = surface_ && surface_->data[i] > 0.5;
+    return {Vec<D>::Zero(), surface, p, rho, p / (rho * rho), pressure_->data.data(), ps.density.data(), ps.mass.data()};
   }
   void pair(const RhsContext<D>&, Index, const Neighbour<D>& nb, Local& l) const {
     const double pj = l.p[nb.j], inv_rhoj = 1.0 / l.rho[nb.j], mj = l.m[nb.j];
-    const double coef = symmetric_ ? mj * (l.pi_over_rho2 + pj * inv_rhoj * inv_rhoj)
-                                   : mj * inv_rhoj * (pj - l.pi) / l.rhoi;
+    const double coef = l.surface    ? 2.0 * mj * inv_rhoj * pj / l.rhoi
+                        : symmetric_ ? mj * (l.pi_over_rho2 + pj * inv_rhoj * inv_rhoj)
+                                     : mj * inv_rhoj * (pj - l.pi) / l.rhoi;
     l.acc -= (coef * nb.F) * nb.rij;
   }
   void end(const RhsContext<D>& ctx, Index i, Local& l) const {
@@ -52,8 +68,9 @@ class PressureGradient final : public PairEffect<D, PressureGradient<D>> {
   }
 
  private:
-  bool symmetric_;
+  bool symmetric_, mirror_;
   const Field* pressure_ = nullptr;
+  const Field* surface_ = nullptr;
 };
 
 }  // namespace

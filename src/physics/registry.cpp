@@ -12,7 +12,9 @@ namespace vesph {
   X(velocity_gradient, makeVelocityGradient, "velocity gradient kappa, Fang et al. eq. (23)")       \
   X(stress_divergence, makeStressDivergence, "elastic stress force div(S)/rho, Fang et al. eq. (27)") \
   X(oldroyd_b, makeOldroydB, "Oldroyd-B elastic stress, Fang et al. eq. (28) (relaxation_time, polymer_viscosity)") \
-  X(ucm, makeUcm, "upper-convected Maxwell: Oldroyd-B without solvent viscosity")
+  X(ucm, makeUcm, "upper-convected Maxwell: Oldroyd-B without solvent viscosity")                  \
+  X(second_order_fluid, makeSecondOrderFluid, "second-order fluid, thesis eqs. (2.2)/(2.3), Table 2-1 (alpha1, alpha2, form, derivative, procedure)") \
+  X(xpp, makeXpp, "single-equation eXtended Pom-Pom, Verbeeten et al. 2001 (backbone_relaxation_time, modulus, arms, ...)")
 
 #define VESPH_DECLARE(NAME, FN, SUMMARY) \
   template <int D>                       \

@@ -3,7 +3,10 @@
 // pressure_gradient and viscosity effects):
 //   dv_i^a/dt += sum_j m_j (S_i^{ab}/rho_i^2 + S_j^{ab}/rho_j^2) dW_ij/dx_i^b
 // Antisymmetric in i, j: conserves linear momentum. Wall particles carry the stress
-// extrapolated from the fluid (Fang eq. 46).
+// extrapolated from the fluid (Fang eq. 46). The stress is read from the field
+// "elastic_stress": symmetric (3 components in 2D, 6 in 3D: the rate-type models) or a full
+// row-major D x D tensor (the second-order fluid, whose mixed convected derivative is not
+// symmetric); the divergence is taken over the second index, (div S)^a = dS^{ab}/dx^b.
 #include "vesph/physics/constitutive.hpp"
 #include "vesph/physics/registry.hpp"
 
@@ -22,6 +25,9 @@ class StressDivergence final : public PairEffect<D, StressDivergence<D>> {
     if (!stress_)
       throw InputError("effects.stress_divergence needs an elastic stress, which no effect of this scene evolves: "
                        "add a constitutive model such as [effects.oldroyd_b]");
+    full_ = stress_->components == D * D;
+    if (!full_ && stress_->components != symmetricComponents<D>())
+      throw std::logic_error("elastic_stress has an unexpected number of components");
   }
 
   struct Local {
@@ -34,12 +40,12 @@ class StressDivergence final : public PairEffect<D, StressDivergence<D>> {
   Local begin(const RhsContext<D>& ctx, Index i) const {
     const ParticleSet<D>& p = ctx.particles;
     const double rho = p.density[i];
-    return {Vec<D>::Zero(), unpackSymmetric<D>(stress_->data.data() + symmetricComponents<D>() * i) / (rho * rho),
-            stress_->data.data(), p.density.data(), p.mass.data()};
+    return {Vec<D>::Zero(), load(stress_->data.data(), i) / (rho * rho), stress_->data.data(), p.density.data(),
+            p.mass.data()};
   }
   void pair(const RhsContext<D>&, Index, const Neighbour<D>& nb, Local& l) const {
     const double inv_rho = 1.0 / l.rho[nb.j];
-    const Mat<D> Sj = unpackSymmetric<D>(l.S + symmetricComponents<D>() * nb.j);
+    const Mat<D> Sj = load(l.S, nb.j);
     l.acc += (l.m[nb.j] * nb.F) * ((l.Si_over_rho2 + Sj * (inv_rho * inv_rho)) * nb.rij);
   }
   void end(const RhsContext<D>& ctx, Index i, Local& l) const {
@@ -47,7 +53,12 @@ class StressDivergence final : public PairEffect<D, StressDivergence<D>> {
   }
 
  private:
+  Mat<D> load(const double* S, Index i) const {
+    if (full_) return Eigen::Map<const Eigen::Matrix<double, D, D, Eigen::RowMajor>>(S + D * D * i);
+    return unpackSymmetric<D>(S + symmetricComponents<D>() * i);
+  }
   const Field* stress_ = nullptr;
+  bool full_ = false;
 };
 
 }  // namespace

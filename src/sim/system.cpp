@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <exception>
 
 namespace vesph {
 
@@ -22,13 +23,17 @@ void SphSystem<D>::setup(double spacing, double rest_density, double viscosity, 
     }
   }
   evolving_.clear();
-  Setup<D> s{particles, kernel, spacing, rest_density, viscosity, body_acceleration_, pressure_model_, &evolving_};
-  for (auto& b : boundaries) b->setup(s);
   // Effects are set up in phase order, so that an effect finds the fields of the phases that
   // run before it (the velocity gradient before the stress model, the stress before its
-  // divergence), whatever the order of the scene.
-  std::stable_sort(effects.begin(), effects.end(),
-                   [](const auto& a, const auto& b) { return a->phase() < b->phase(); });
+  // divergence), whatever the order of the scene; inside a phase by passOrder (readers of a
+  // value written in the same pass after its writer).
+  std::stable_sort(effects.begin(), effects.end(), [](const auto& a, const auto& b) {
+    return a->phase() != b->phase() ? a->phase() < b->phase() : a->passOrder() < b->passOrder();
+  });
+  std::vector<Effect<D>*> all;
+  for (auto& e : effects) all.push_back(e.get());
+  Setup<D> s{particles, kernel, spacing, rest_density, viscosity, body_acceleration_, pressure_model_, &evolving_, &all};
+  for (auto& b : boundaries) b->setup(s);
   for (auto& e : effects) e->setup(s);
   particles.resizeFields();
   for (Field* f : evolving_)
@@ -108,13 +113,22 @@ template <int D>
 void SphSystem<D>::particlePass(const std::vector<Effect<D>*>& list, const RhsContext<D>& ctx) {
   if (list.empty()) return;
   const std::size_t n = particles.n_moving;
+  // An exception must not leave an OpenMP region (that terminates the program): the first
+  // one (a model's NumericalFailure) is kept and rethrown after the region.
+  std::exception_ptr failure;
 #pragma omp parallel if (n >= kParallelMinimum)
   {
     const std::size_t nt = static_cast<std::size_t>(omp_get_num_threads());
     const std::size_t t = static_cast<std::size_t>(omp_get_thread_num());
     const std::size_t b = n * t / nt, e = n * (t + 1) / nt;
-    for (Effect<D>* eff : list) eff->particles(ctx, b, e);
+    try {
+      for (Effect<D>* eff : list) eff->particles(ctx, b, e);
+    } catch (...) {
+#pragma omp critical(vesph_particle_pass_failure)
+      if (!failure) failure = std::current_exception();
+    }
   }
+  if (failure) std::rethrow_exception(failure);
 }
 
 template <int D>
@@ -186,6 +200,9 @@ StabilitySnapshot SphSystem<D>::stability() const {
 
 template <int D>
 bool SphSystem<D>::afterStep(double t, double dt, double* y) {
+  const std::size_t n = particles.n_moving;
+  const AcceptedStep<D> step{t, dt, n, y, y + n * D, y + n * (D + 1)};
+  for (auto& e : effects) e->afterStep(step);
   return observer ? observer(t, dt, y) : true;
 }
 

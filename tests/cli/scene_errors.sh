@@ -21,6 +21,9 @@ printf 'name = "x"\n[fluid\ndensity = 1\n' > "$WORK/bad.toml"
 expect 2 "bad.toml: not valid TOML" -- "$VESPH" check "$WORK/bad.toml"
 expect 2 "missing.toml: cannot open the scene file" -- "$VESPH" run "$WORK/missing.toml"
 expect 2 "--set 'novalue': expected KEY=VALUE" -- "$VESPH" check "$S" --set novalue
+# a solvent viscosity that no effect applies (it would show in extra_stress only)
+sed -e '/^\[effects.viscosity\]/d' "$SRC/cases/startup_channel_oldroyd_b.toml" > "$WORK/ob_no_viscosity.toml"
+expect 2 "solvent viscosity, but the scene has no \[effects.viscosity\]" -- "$VESPH" check "$WORK/ob_no_viscosity.toml"
 # run refuses invalid input before writing anything
 expect 2 "fluid.viscosity" -- "$VESPH" run "$S" -o "$WORK/out_bad" --set fluid.viscosity=-1
 [ ! -e "$WORK/out_bad" ] && pass || fail "run with invalid input created its output directory"

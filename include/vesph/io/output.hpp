@@ -46,7 +46,7 @@ class OutputWriter {
     std::string group;
     double time;
     std::size_t n;
-    bool stress, free_surface, pressure;
+    bool stress, free_surface, pressure, stress_zz;
   };
   void appendDiagnostics(const std::vector<DiagnosticsRow>& rows);
   void writeXdmf() const;

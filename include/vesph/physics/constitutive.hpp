@@ -12,7 +12,20 @@
 //
 // Symmetric tensors are stored as 3 components in 2D (xx, xy, yy) and 6 in 3D
 // (xx, xy, xz, yy, yz, zz), the order of the output's extra_stress.
+//
+// Out-of-plane stress in 2D. 2D is planar flow (v_z = 0, d/dz = 0): S_xz = S_yz = 0 stay zero,
+// but S_zz obeys dS_zz/dt = rate(kappa, S)_zz, which is zero for a model linear in S with a
+// zero initial S_zz (Oldroyd-B, UCM: S_zz = 0 for all time, 3 components suffice) but not for
+// a model whose relaxation couples the components through invariants (XPP: tr(S), tr(S.S)).
+// Such a model declares  static constexpr bool kOutOfPlaneStress = true;  and a rate that
+// accepts 3x3 tensors; in 2D the effect then also evolves "elastic_stress_zz" (1 component,
+// written as extra_stress_zz) and calls the rate on the 3x3 tensors with kappa and S embedded
+// (kappa_za = kappa_az = 0, S_xz = S_yz = 0). "elastic_stress" keeps its 3 components, so the
+// stress divergence, the walls and the output are unchanged.
 #include <Eigen/Dense>
+
+#include <sstream>
+#include <string>
 
 #include "vesph/io/config.hpp"
 #include "vesph/physics/effect.hpp"
@@ -48,9 +61,22 @@ void packSymmetric(const Mat<D>& m, double* s) {
   }
 }
 
+// Whether a model needs S_zz in planar flow (see above); false unless it says so.
+template <class Model>
+constexpr bool hasOutOfPlaneStress() {
+  if constexpr (requires { Model::kOutOfPlaneStress; })
+    return Model::kOutOfPlaneStress;
+  else
+    return false;
+}
+
 // Base of the models that evolve an elastic stress S. Model supplies
 //   Mat<D> rate(const Mat<D>& kappa, const Mat<D>& S) const     dS/dt
-//   double polymerViscosity() const, double relaxationTime() const  (scales, stability)
+//     (for kOutOfPlaneStress models: also Mat<3> rate(const Mat<3>&, const Mat<3>&) in 2D)
+//   double polymerViscosity() const, double relaxationTime() const  (scales, stability:
+//     modulus G = eta_p/lambda for the elastic wave speed)
+// and optionally
+//   double shortestRelaxationTime() const   the relaxation step limit's time (default lambda)
 template <int D, class Model>
 class ConstitutiveEffect : public Effect<D> {
  public:
@@ -65,9 +91,21 @@ class ConstitutiveEffect : public Effect<D> {
     stress_ = &s.particles.fields.require("elastic_stress", symmetricComponents<D>());
     stress_->extrapolated_to_walls = true;  // Fang eq. (46) on wall particles
     slot_ = s.evolve(*stress_);
+    if constexpr (outOfPlane()) {
+      zz_ = &s.particles.fields.require("elastic_stress_zz", 1);
+      zz_->extrapolated_to_walls = true;  // for the output only: no force uses S_zz
+      slot_zz_ = s.evolve(*zz_);
+    }
     extra_ = &s.particles.fields.require("extra_stress", symmetricComponents<D>());
     extra_->extrapolated_to_walls = true;
     solvent_viscosity_ = s.viscosity;
+    // The solvent stress eta_s (kappa + kappa^T) goes into extra_stress; it acts only through
+    // [effects.viscosity]. Without it the output would show a stress no force applies.
+    if (solvent_viscosity_ > 0 && !s.find("viscosity"))
+      throw InputError("effects." + std::string(this->name()) + ": fluid.viscosity = " +
+                       std::to_string(solvent_viscosity_) +
+                       " Pa s is the solvent viscosity, but the scene has no [effects.viscosity] to apply it: add "
+                       "[effects.viscosity], or set fluid.viscosity = 0 for a fluid without solvent");
     rho0_ = s.rest_density;
   }
 
@@ -76,7 +114,9 @@ class ConstitutiveEffect : public Effect<D> {
     const double lambda = m.relaxationTime();
     // Elastic shear waves travel at sqrt(G/rho), G = eta_p/lambda.
     if (lambda > 0) in.elastic_wave_speed = std::max(in.elastic_wave_speed, std::sqrt(m.polymerViscosity() / (lambda * rho0_)));
-    if (lambda > 0) in.relaxation_time = in.relaxation_time > 0 ? std::min(in.relaxation_time, lambda) : lambda;
+    double shortest = lambda;
+    if constexpr (requires { m.shortestRelaxationTime(); }) shortest = m.shortestRelaxationTime();
+    if (shortest > 0) in.relaxation_time = in.relaxation_time > 0 ? std::min(in.relaxation_time, shortest) : shortest;
   }
 
   double stressScale(double velocity, double length) const override {
@@ -90,19 +130,40 @@ class ConstitutiveEffect : public Effect<D> {
     double* dS = ctx.field_rates[slot_];
     double* T = extra_->data.data();
     constexpr int nc = symmetricComponents<D>();
-    for (std::size_t i = begin; i < end; ++i) {
-      const Eigen::Map<const Eigen::Matrix<double, D, D, Eigen::RowMajor>> kappa(k + D * D * i);
-      const Mat<D> Si = unpackSymmetric<D>(S + nc * i);
-      packSymmetric<D>(m.rate(kappa, Si), dS + nc * i);
-      packSymmetric<D>(Si + solvent_viscosity_ * (kappa + kappa.transpose()), T + nc * i);
+    std::size_t i = begin;
+    try {
+      for (; i < end; ++i) {
+        const Eigen::Map<const Eigen::Matrix<double, D, D, Eigen::RowMajor>> kappa(k + D * D * i);
+        const Mat<D> Si = unpackSymmetric<D>(S + nc * i);
+        if constexpr (outOfPlane()) {
+          // planar flow embedded in 3D: the 3x3 rate, of which xz and yz vanish
+          Mat<3> kappa3 = Mat<3>::Zero(), S3 = Mat<3>::Zero();
+          kappa3.template topLeftCorner<2, 2>() = kappa;
+          S3.template topLeftCorner<2, 2>() = Si;
+          S3(2, 2) = zz_->data[i];
+          const Mat<3> R = m.rate(kappa3, S3);
+          packSymmetric<2>(R.template topLeftCorner<2, 2>(), dS + nc * i);
+          ctx.field_rates[slot_zz_][i] = R(2, 2);
+        } else {
+          packSymmetric<D>(m.rate(kappa, Si), dS + nc * i);
+        }
+        packSymmetric<D>(Si + solvent_viscosity_ * (kappa + kappa.transpose()), T + nc * i);
+      }
+    } catch (const NumericalFailure& e) {
+      std::ostringstream os;
+      os << e.what() << " (fluid particle id " << ctx.particles.id[i] << " at t = " << ctx.time << " s)";
+      throw NumericalFailure(os.str());
     }
   }
 
  private:
+  // (a function, not a constant: Model is incomplete where this base is instantiated)
+  static constexpr bool outOfPlane() { return D == 2 && hasOutOfPlaneStress<Model>(); }
   const Field* kappa_ = nullptr;
   Field* stress_ = nullptr;
+  Field* zz_ = nullptr;  // S_zz in 2D for kOutOfPlaneStress models
   Field* extra_ = nullptr;
-  int slot_ = -1;
+  int slot_ = -1, slot_zz_ = -1;
   double solvent_viscosity_ = 0, rho0_ = 1;
 };
 

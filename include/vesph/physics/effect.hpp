@@ -10,7 +10,8 @@
 //   (walls)    boundary values on fixed particles (vesph/boundary)
 //   gradients  pair pass: velocity gradients, number density, ...
 //   rates      per particle: constitutive stress rates
-//   forces     pair pass: continuity, pressure gradient, viscous and stress terms
+//   forces     pair pass: continuity, pressure gradient, viscous and stress terms, stabilisers
+//              (a pair pass first runs Effect::prepare of the effects that ask for it)
 //   external   per particle: body forces
 #include <span>
 #include <string>
@@ -77,6 +78,21 @@ struct StabilityInputs {
 };
 
 template <int D>
+class Effect;
+
+// The state an integrator has just accepted (Effect::afterStep): the moving particles'
+// positions [n*D], densities [n] and velocities [n*D] at time t, reached by a step of dt.
+template <int D>
+struct AcceptedStep {
+  double t;
+  double dt;
+  std::size_t n_moving;
+  const double* position;
+  const double* density;
+  const double* velocity;
+};
+
+template <int D>
 struct Setup {
   ParticleSet<D>& particles;
   const Kernel& kernel;
@@ -86,6 +102,14 @@ struct Setup {
   Vec<D> body_acceleration; // sum of constant body forces, m/s^2
   const PressureModel* pressure_model = nullptr;  // set by the effect that provides one
   std::vector<Field*>* evolving = nullptr;          // the system's evolving fields
+  const std::vector<Effect<D>*>* effects = nullptr;  // every effect of the scene
+
+  // The scene's effect of that name, or nullptr (for prerequisites between effects).
+  const Effect<D>* find(std::string_view name) const {
+    for (const Effect<D>* e : *effects)
+      if (e->name() == name) return e;
+    return nullptr;
+  }
 
   // Puts the field's moving-particle values into the ODE state (after the velocities);
   // returns the slot of its rates in RhsContext::field_rates.
@@ -106,6 +130,14 @@ class Effect {
   virtual bool pairwise() const { return false; }
   // Pair effects that read Neighbour::W say so; otherwise the driver skips evaluating it.
   virtual bool needsKernelValue() const { return false; }
+  // Within one pair pass the effects run one after another for each particle i. An effect
+  // that reads, for particle i, a value another effect of the same pass writes for i (the
+  // velocity gradient) runs after it: it returns a higher order. Effects are set up in
+  // (phase, passOrder) order as well.
+  virtual int passOrder() const { return 0; }
+  // The discrete form an effect was configured with, where it has several (pressure_gradient:
+  // "symmetric" or "difference"), for effects whose procedure depends on it.
+  virtual std::string_view form() const { return {}; }
 
   // Request fields, check prerequisites (throw InputError with the fix in the message).
   virtual void setup(Setup<D>& s) {}
@@ -117,6 +149,21 @@ class Effect {
   // The scale of the stress an evolving model produces at velocity V over length L (Pa), for
   // default error-control tolerances; 0 when the effect evolves no stress.
   virtual double stressScale(double velocity, double length) const { return 0.0; }
+
+  // Called once for every step the integrator accepts (never for rejected steps or stages),
+  // for effects that carry information from one step to the next. The right-hand side stays
+  // a function of (t, y) within a step.
+  virtual void afterStep(const AcceptedStep<D>& step) {}
+
+  // Per-particle preparation for a pair effect, for values that the pair term reads for every
+  // neighbour j and that are expensive per pair (the artificial stress R_j, Fang eqs. 40-44):
+  // PairDriver::run calls prepare, for each effect of the pass whose prepares() is true,
+  // before the neighbour loop of that pass (so after the state phase and the walls), over
+  // disjoint ranges [begin, end) that together cover ALL particles, moving [0, n_moving) and
+  // fixed [n_moving, N), in parallel (OpenMP, by the driver). It writes only to the particles
+  // of its range and must not throw. A pass without such an effect runs no extra code.
+  virtual bool prepares() const { return false; }
+  virtual void prepare(const RhsContext<D>& ctx, std::size_t begin, std::size_t end) const {}
 
   // Per-particle effects: moving particles [begin, end).
   virtual void particles(const RhsContext<D>& ctx, std::size_t begin, std::size_t end) const {}

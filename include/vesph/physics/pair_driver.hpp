@@ -26,12 +26,18 @@ class PairDriver {
       if (s.size() < list.maxCount()) s.resize(list.maxCount() + 16);
   }
 
-  // One pair pass over the moving particles with the given pair effects.
+  // One pair pass over the moving particles with the given pair effects. Effects that
+  // prepare per-particle values (Effect::prepares) get their prepare() over all particles
+  // first; without one the pass runs no extra code.
   void run(const RhsContext<D>& ctx, const NeighbourList<D>& list,
            std::span<Effect<D>* const> effects) {
     if (effects.empty()) return;
-    bool need_w = false;
-    for (Effect<D>* e : effects) need_w = need_w || e->needsKernelValue();
+    bool need_w = false, need_prepare = false;
+    for (Effect<D>* e : effects) {
+      need_w = need_w || e->needsKernelValue();
+      need_prepare = need_prepare || e->prepares();
+    }
+    if (need_prepare) prepareParticles(ctx, effects);
     pairs_ += forEachMoving(ctx.particles, ctx.kernel, ctx.domain, list, need_w,
                             [&](Index i, std::span<const Neighbour<D>> moving, std::span<const Neighbour<D>> fixed) {
                               for (Effect<D>* e : effects) e->interact(ctx, i, moving, fixed);
@@ -70,6 +76,19 @@ class PairDriver {
   std::uint64_t pairsEvaluated() const { return pairs_; }
 
  private:
+  // Effect::prepare over all particles [0, N), one contiguous range per thread.
+  static void prepareParticles(const RhsContext<D>& ctx, std::span<Effect<D>* const> effects) {
+    const std::size_t N = ctx.particles.size();
+#pragma omp parallel if (N >= kParallelMinimum)
+    {
+      const std::size_t nt = static_cast<std::size_t>(omp_get_num_threads());
+      const std::size_t t = static_cast<std::size_t>(omp_get_thread_num());
+      const std::size_t b = N * t / nt, e = N * (t + 1) / nt;
+      for (Effect<D>* eff : effects)
+        if (eff->prepares()) eff->prepare(ctx, b, e);
+    }
+  }
+
   template <bool WithW, class Fn>
   std::uint64_t loop(const ParticleSet<D>& p, const Kernel& kernel, const Domain<D>& domain,
                      const NeighbourList<D>& list, Fn& fn) {
