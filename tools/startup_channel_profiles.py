@@ -62,29 +62,15 @@ import csv
 import math
 import os
 import sys
-import tomllib
 
 import numpy as np
+
+import vesph_output
+from vesph_output import ToolError
 
 GENERIC_EFFECTS = {"continuity", "equation_of_state", "pressure_gradient", "viscosity",
                    "body_force", "velocity_gradient", "stress_divergence"}
 PROG = "startup_channel_profiles"
-
-
-class ToolError(Exception):
-    """An error reported as 'PROG: error: message' with an exit status."""
-
-    def __init__(self, msg, status=1):
-        super().__init__(msg)
-        self.status = status
-
-
-def _as_str(value):
-    if isinstance(value, np.ndarray) and value.shape == ():
-        value = value[()]
-    if isinstance(value, (bytes, np.bytes_)):
-        return bytes(value).decode("utf-8")
-    return str(value)
 
 
 # ----------------------------------------------------------------------------- reading
@@ -92,39 +78,10 @@ class Channel:
     """The channel geometry and the frames of one vesph output file."""
 
     def __init__(self, path):
-        import h5py
-
-        if not os.path.exists(path):
-            raise ToolError(f"{path}: no such file")
-        if os.path.isdir(path):
-            raise ToolError(f"{path} is a directory; give the .h5 file of the run")
-        try:
-            self.f = h5py.File(path, "r")
-        except OSError as e:
-            raise ToolError(f"{path} is not an HDF5 file ({e})")
+        self.f, _ = vesph_output.open_h5(path)
         f = self.f
-        fmt = _as_str(f.attrs["format"]) if "format" in f.attrs else None
-        if fmt is None or not fmt.startswith("vesph-"):
-            raise ToolError(f"{path} is not a vesph output: root attribute 'format' is "
-                            + ("missing" if fmt is None else f"{fmt!r}, expected 'vesph-1'"))
-        if "scene" not in f.attrs:
-            raise ToolError(f"{path} is not a vesph output: root attribute 'scene' is missing")
-        try:
-            self.scene = tomllib.loads(_as_str(f.attrs["scene"]))
-        except tomllib.TOMLDecodeError as e:
-            raise ToolError(f"{path}: the stored scene is not valid TOML ({e})")
+        self.scene, self.dim, self.dx = vesph_output.read_header(f, path)
         sc = self.scene
-        self.dim = int(f.attrs["dim"]) if "dim" in f.attrs else int(sc.get("dimension", 2))
-        if self.dim not in (2, 3):
-            raise ToolError(f"{path}: dim = {self.dim}, expected 2 or 3")
-        if "dx" in f.attrs:
-            self.dx = float(f.attrs["dx"])
-        else:
-            try:
-                self.dx = float(sc["particles"]["spacing"])
-            except (KeyError, TypeError, ValueError):
-                raise ToolError(f"{path}: no particle spacing (root attribute dx or "
-                                "particles.spacing)")
         blocks = [b for b in sc.get("blocks", []) if b.get("kind") == "fluid"]
         if not blocks:
             raise ToolError(f"{path}: the scene has no fluid block ([[blocks]] kind = "
@@ -565,11 +522,7 @@ def main(argv=None):
                     help="file name prefix (default: the scene name)")
     ap.add_argument("--no-png", action="store_true", help="write the CSV files only")
     a = ap.parse_args(argv)
-    try:
-        return run(a)
-    except ToolError as e:
-        print(f"{PROG}: error: {e}", file=sys.stderr)
-        return e.status
+    return vesph_output.run_reporting_errors(PROG, run, a)
 
 
 if __name__ == "__main__":

@@ -1,6 +1,7 @@
 #!/usr/bin/python3
-"""Self-test for tools/poiseuille_check.py, tools/check_output.py and (when
-ParaView is installed) tools/paraview_check.py.
+"""Self-test for tools/poiseuille_check.py, tools/check_output.py,
+tools/startup_channel_profiles.py and (when ParaView is installed)
+tools/paraview_check.py.
 
 Usage
 -----
@@ -24,6 +25,27 @@ DIR/<name>.h5 + DIR/<name>.xdmf (XDMF 3 in the layout the C++ writer uses)
     on a perturbed velocity, on a mass drift and on a missing time,
   * check_output.py accepts the good outputs and catches each of a series
     of deliberately broken HDF5 / XDMF files, naming the problem,
+  * startup_channel_profiles.py, on synthetic periodic channels (2D with
+    40 and 39 rows, 3D, Newtonian without extra_stress, rows jittered in y
+    by 0.1 dx or, to force the lattice-bin fallback, 0.45 dx) with known
+    fields v_x(x, y, t), T_xx, T_xy, T_yy: the profiles at stations (also
+    across the periodic boundary, and with wider bins) and the centreline
+    history equal the per-row means computed directly from the lattice
+    indices; row clustering; the nearest-frame rule; the error messages
+    and exit codes (missing file, not HDF5, not vesph, no fluid, station or
+    time out of range, bad options),
+  * xpp_steady_shear.py: the steady homogeneous-shear XPP solver (small-rate
+    limit = Oldroyd-B, Newton and ODE routes agree, flow-curve inversion,
+    channel velocity against quadrature, the 1-D start-up tends to the steady
+    channel) and its check on a synthetic XPP channel built from the 1-D
+    start-up: passes, and fails on a 5 % error in tau_zz, on a frame-to-frame
+    oscillation of the start-up, before the steady state, without an XPP,
+  * drop_measure.py, on synthetic drop-impact outputs (lattice disks of
+    known width, height and area, a blob flattened on the wall, a disk split
+    in two, a disk with a hole, a disk with an open slot, detached particles,
+    changed densities, a 3D sphere, two runs compared): the measured columns,
+    the cluster / void / crack / nearest-neighbour indicators, the checks' exit codes (--max-volume-error,
+    --no-fracture, --expect-fracture, --until) and the error messages,
   * paraview_check.py (skipped when ParaView's Python modules are absent)
     reads the synthetic XDMF with the Xdmf3 reader.
 Prints one line per test and "N passed, M failed" at the end; exit status
@@ -51,6 +73,7 @@ PY = "/usr/bin/python3"
 import h5py  # noqa: E402
 
 from poiseuille_check import analytic_velocity  # noqa: E402
+from startup_channel_profiles import cluster_rows  # noqa: E402
 
 SCENE_2D = """\
 name = "poiseuille_newtonian"
@@ -271,6 +294,127 @@ def write_3d_case(d, name="box3d", **xdmf_kw):
     with open(os.path.join(d, "summary.json"), "w") as fh:
         json.dump({"name": name}, fh)
     return h5
+
+
+# ---------------------------------------- synthetic start-up channel (profiles)
+SCENE_STARTUP = """\
+name = "startup_synth"
+dimension = {dim}
+[domain]
+min = [0.0, {ylo!r}{zmin}]
+max = [{L!r}, {yhi!r}{zmax}]
+periodic = [true, false{zper}]
+[particles]
+spacing = {dx!r}
+[fluid]
+density = 1000.0
+viscosity = 5.0e-4
+[[blocks]]
+kind = "fluid"
+min = [0.0, 0.0{zmin}]
+max = [{L!r}, {H!r}{zmax}]
+[[blocks]]
+kind = "wall"
+min = [0.0, {ylo!r}{zmin}]
+max = [{L!r}, 0.0{zmax}]
+[[blocks]]
+kind = "wall"
+min = [0.0, {H!r}{zmin}]
+max = [{L!r}, {yhi!r}{zmax}]
+[effects.body_force]
+acceleration = [2.0e-4, 0.0{zzero}]
+{model}
+[time]
+end = 0.4
+"""
+SU_NX, SU_TIMES = 20, [0.0, 0.1, 0.2, 0.3, 0.4]
+SU_UC, SU_EPS, SU_A, SU_B, SU_C, SU_D = 2.5e-5, 3e-7, 7e-7, 2e-8, 9e-5, -1e-9
+
+
+def su_fields(x, y, t, yc, a, L):
+    """The synthetic fields of the start-up channel: (vx, Txx, Txy, Tyy) [m/s, Pa]."""
+    s = t / SU_TIMES[-1]
+    Y = (y - yc) / a
+    vx = SU_UC * (1 - Y * Y) * s + SU_EPS * np.sin(2 * np.pi * x / L)
+    txx = SU_A * Y * Y * s + SU_B * x / L
+    txy = -SU_C * Y * s
+    tyy = SU_D * s + SU_B * (x / L) ** 2
+    return vx, txx, txy, tyy
+
+
+def write_startup_case(d, ny=40, jitter=0.1, stress=True, dim=2, no_fluid=False):
+    """A periodic channel, SU_NX x ny fluid particles on the dx lattice (x exact, y moved
+    by up to +-jitter*dx, uniform random), 5 wall rows each side, with the fields of
+    su_fields on the fluid and 1e3 (to be ignored) on the walls. 3D: two layers in z.
+    Returns (h5 path, info) with info['frames'] = list of (t, x, y, vx, txx, txy, tyy,
+    row, col) over the fluid particles (row, col: lattice indices)."""
+    os.makedirs(d, exist_ok=True)
+    H_ = ny * DX
+    L = SU_NX * DX
+    yc, a = H_ / 2, H_ / 2
+    nz = 2 if dim == 3 else 1
+    ii, jj, kk = np.meshgrid(np.arange(SU_NX), np.arange(-5, ny + 5), np.arange(nz),
+                             indexing="ij")
+    ii, jj, kk = ii.ravel(), jj.ravel(), kk.ravel()
+    fl = (jj >= 0) & (jj < ny)
+    order = np.argsort(~fl, kind="stable")          # fluid first
+    ii, jj, kk, fl = ii[order], jj[order], kk[order], fl[order]
+    N = len(ii)
+    rng = np.random.default_rng(7)
+    z3 = {"zmin": ", 0.0" if dim == 3 else "", "zmax": f", {nz * DX!r}" if dim == 3 else "",
+          "zper": ", true" if dim == 3 else "", "zzero": ", 0.0" if dim == 3 else ""}
+    model = ("[effects.velocity_gradient]\n[effects.oldroyd_b]\nrelaxation_time = 0.1\n"
+             "polymer_viscosity = 5.0e-4\n[effects.stress_divergence]" if stress
+             else "[effects.viscosity]")
+    scene = SCENE_STARTUP.format(dim=dim, ylo=-5 * DX, yhi=H_ + 5 * DX, L=L, dx=DX, H=H_,
+                                 model=model, **z3)
+    frames, info = [], []
+    for i, t in enumerate(SU_TIMES):
+        pos = np.zeros((N, dim))
+        pos[:, 0] = (ii + 0.5) * DX
+        pos[:, 1] = (jj + 0.5) * DX + np.where(fl, jitter * DX * rng.uniform(-1, 1, N), 0.0)
+        if dim == 3:
+            pos[:, 2] = (kk + 0.5) * DX
+        vx, txx, txy, tyy = su_fields(pos[:, 0], pos[:, 1], t, yc, a, L)
+        vel = np.zeros((N, dim))
+        vel[:, 0] = np.where(fl, vx, 0.0)
+        vel[fl, 1] = 1e-9 * rng.standard_normal(int(fl.sum()))
+        kind = np.where(fl, 0, np.where((jj == -1) | (jj == ny), 1, 2)).astype(np.uint8)
+        if no_fluid:
+            kind[:] = 1
+        fr = {"time": t, "step": 10 * i, "id": np.arange(N, dtype=np.uint64), "kind": kind,
+              "position": pos, "velocity": vel, "density": np.full(N, 1000.0),
+              "mass": np.full(N, 1000.0 * DX ** dim), "pressure": np.zeros(N)}
+        if stress:
+            T = np.full((N, 3 if dim == 2 else 6), 1e3)
+            ixx, ixy, iyy = (0, 1, 2) if dim == 2 else (0, 1, 3)
+            T[fl, :] = 5e3                              # xz, yz, zz in 3D: not used
+            T[fl, ixx], T[fl, ixy], T[fl, iyy] = txx[fl], txy[fl], tyy[fl]
+            fr["extra_stress"] = T
+        frames.append(fr)
+        info.append((t, pos[fl, 0], pos[fl, 1], vx[fl], txx[fl], txy[fl], tyy[fl],
+                     jj[fl], ii[fl]))
+    h5 = os.path.join(d, "startup_synth.h5")
+    write_h5(h5, scene, dim, frames)
+    return h5, {"frames": info, "yc": yc, "a": a, "L": L, "ny": ny}
+
+
+def read_csv_rows(path):
+    import csv as _csv
+    with open(path, newline="") as fh:
+        return list(_csv.DictReader(fh))
+
+
+def su_expected_profile(info, frame, cols):
+    """Per-row means over the particles of the given lattice columns (exact reference)."""
+    t, x, y, vx, txx, txy, tyy, row, col = info["frames"][frame]
+    out = []
+    for j in range(info["ny"]):
+        m = (row == j) & np.isin(col, cols)
+        out.append({"y": y[m].mean(), "vx": vx[m].mean(), "txx": txx[m].mean(),
+                    "txy": txy[m].mean(), "tyy": tyy[m].mean(),
+                    "n1": (txx[m] - tyy[m]).mean(), "count": int(m.sum())})
+    return out
 
 
 # ------------------------------------------------------------------- runner
@@ -586,6 +730,201 @@ def make_tests(tmp):
         rc, out, err = tool("check_output.py", d)
         expect(rc == 1 and "does not exist" in out, f"exit {rc}", out + err)
 
+    # ---- startup_channel_profiles
+    def prof(h5, *args, png=False):
+        od = os.path.join(tmp, "prof_out")
+        extra = () if png else ("--no-png",)
+        rc, out, err = tool("startup_channel_profiles.py", h5, "--out-dir", od, *extra, *args)
+        return rc, out, err, od
+
+    def close(a, b, scale, what):
+        expect(abs(float(a) - float(b)) <= 1e-12 * scale, f"{what}: {a} != {b}")
+
+    SCALES = {"vx": SU_UC, "txx": SU_A, "txy": SU_C, "tyy": 1e-8, "n1": SU_A, "y": H}
+    CSVCOL = {"vx": "vx_m_s", "txx": "Txx_Pa", "txy": "Txy_Pa", "tyy": "Tyy_Pa",
+              "n1": "N1_Pa", "y": "y_m"}
+
+    def check_profile(rows, info, frame, station, cols, stress=True, label=""):
+        sel = [r for r in rows if abs(float(r["station_x_m"]) - station) < 1e-15
+               and float(r["time_s"]) == SU_TIMES[frame]]
+        expect(len(sel) == info["ny"], f"{label}: {len(sel)} rows at x = {station}, "
+               f"t = {SU_TIMES[frame]}, expected {info['ny']}")
+        expect(all(r["frame"] == f"{frame:06d}" for r in sel), f"{label}: frame column")
+        ref = su_expected_profile(info, frame, cols)
+        sel.sort(key=lambda r: float(r["y_m"]))
+        for j, (r, e) in enumerate(zip(sel, ref)):
+            expect(int(r["count"]) == e["count"],
+                   f"{label}: row {j} count {r['count']}, expected {e['count']}")
+            for k in (("y", "vx", "txx", "txy", "tyy", "n1") if stress else ("y", "vx")):
+                close(r[CSVCOL[k]], e[k], SCALES[k], f"{label}: row {j} {k}")
+            close(r["Y"], (e["y"] - info["yc"]) / info["a"], 1.0, f"{label}: row {j} Y")
+
+    def check_centreline(csv_path, info, centre_rows, stress=True):
+        rows = read_csv_rows(csv_path)
+        expect(len(rows) == len(SU_TIMES), f"{len(rows)} centreline rows")
+        for i, r in enumerate(rows):
+            t, x, y, vx, txx, txy, tyy, row, col = info["frames"][i]
+            m = np.isin(row, centre_rows)
+            expect(float(r["time_s"]) == SU_TIMES[i] and int(r["step"]) == 10 * i,
+                   f"centreline time/step {r}")
+            expect(int(r["n_centre"]) == int(m.sum()),
+                   f"frame {i}: n_centre {r['n_centre']}, expected {int(m.sum())}")
+            close(r["vx_centre_m_s"], vx[m].mean(), SU_UC, f"frame {i} centreline v_x")
+            if stress:
+                close(r["max_abs_Txy_Pa"], np.max(np.abs(txy)), SU_C, f"frame {i} max|Txy|")
+                close(r["max_N1_Pa"], np.max(txx - tyy), SU_A, f"frame {i} max N1")
+            else:
+                expect("max_N1_Pa" not in r, "stress column without extra_stress")
+
+    h5_su, info_su = write_startup_case(os.path.join(tmp, "su"))
+
+    @t
+    def profiles_cluster_rows_unit():
+        rng = np.random.default_rng(3)
+        rows = np.repeat(np.arange(10), 7)
+        y = (rows + 0.5) * DX + 0.2 * DX * rng.uniform(-1, 1, len(rows))
+        perm = rng.permutation(len(y))
+        lab, n, method = cluster_rows(y[perm], DX, 0.0)
+        expect(n == 10 and method == "clustered", f"{n} rows, {method}")
+        expect(np.array_equal(lab, rows[perm]), "row labels wrong")
+        y2 = (rows + 0.5) * DX + 0.45 * DX * rng.uniform(-1, 1, len(rows))
+        lab, n, method = cluster_rows(y2, DX, 0.0)
+        expect(method.startswith("lattice bins") and n == 10, f"{n} rows, {method}")
+        expect(np.array_equal(lab, rows), "fallback row labels wrong")
+        # a row shifted by more than dx/2 from the lattice is still one cluster
+        lab, n, method = cluster_rows(rows * DX + 0.7 * DX, DX, 0.0)
+        expect(n == 10 and method == "clustered", f"shifted: {n} rows, {method}")
+
+    @t
+    def profiles_exact_default_station_and_time():
+        rc, out, err, od = prof(h5_su)
+        expect(rc == 0, f"exit {rc}", out + err)
+        for needle in ("rows: clustered in 5 frame(s)", "extra_stress present",
+                       "model: oldroyd_b", "y_c = 0.0005 m, a = 0.0005 m", "(periodic)"):
+            expect(needle in out, f"{needle!r} missing", out)
+        rows = read_csv_rows(os.path.join(od, "startup_synth_profiles.csv"))
+        expect(list(rows[0].keys()) == ["station_x_m", "time_s", "frame", "y_m", "Y",
+                                        "vx_m_s", "Txx_Pa", "Txy_Pa", "Tyy_Pa", "N1_Pa",
+                                        "count"], f"header {list(rows[0].keys())}")
+        expect(len(rows) == 40, f"{len(rows)} rows: default = one station, last frame")
+        # middle x = 10 dx lies half-way between lattice columns 9 and 10
+        check_profile(rows, info_su, 4, 10 * DX, [9, 10], label="default")
+        check_centreline(os.path.join(od, "startup_synth_centreline.csv"), info_su, [19, 20])
+
+    @t
+    def profiles_stations_bins_periodic_times():
+        rc, out, err, od = prof(h5_su, "--stations", f"0,{3.5 * DX!r}", "--times", "0.1,0.26")
+        expect(rc == 0, f"exit {rc}", out + err)
+        expect("time 0.26 s: nearest frame 000003 at t = 0.3 s" in out, "nearest-frame note",
+               out)
+        rows = read_csv_rows(os.path.join(od, "startup_synth_profiles.csv"))
+        expect(len(rows) == 2 * 2 * 40, f"{len(rows)} rows")
+        for fr in (1, 3):
+            check_profile(rows, info_su, fr, 0.0, [0, SU_NX - 1], label="x=0 periodic")
+            check_profile(rows, info_su, fr, 3.5 * DX, [3], label="x=3.5dx")
+        rc, out, err, od = prof(h5_su, "--stations", f"0,{3.5 * DX!r}", "--times", "0.2",
+                                "--bin-width", repr(3 * DX))
+        expect(rc == 0, f"exit {rc}", out + err)
+        rows = read_csv_rows(os.path.join(od, "startup_synth_profiles.csv"))
+        check_profile(rows, info_su, 2, 0.0, [18, 19, 0, 1], label="x=0 bin 3dx")
+        check_profile(rows, info_su, 2, 3.5 * DX, [2, 3, 4], label="x=3.5dx bin 3dx")
+        rc, out, err, od = prof(h5_su, "--all-times", "--prefix", "every")
+        expect(rc == 0, f"exit {rc}", out + err)
+        rows = read_csv_rows(os.path.join(od, "every_profiles.csv"))
+        expect(len(rows) == 5 * 40, f"--all-times: {len(rows)} rows")
+        for fr in range(5):
+            check_profile(rows, info_su, fr, 10 * DX, [9, 10], label=f"all-times {fr}")
+
+    @t
+    def profiles_odd_rows_centre_row_only():
+        h5, info = write_startup_case(os.path.join(tmp, "su_odd"), ny=39)
+        rc, out, err, od = prof(h5)
+        expect(rc == 0, f"exit {rc}", out + err)
+        check_centreline(os.path.join(od, "startup_synth_centreline.csv"), info, [19])
+        check_profile(read_csv_rows(os.path.join(od, "startup_synth_profiles.csv")), info, 4,
+                      10 * DX, [9, 10], label="odd")
+
+    @t
+    def profiles_disordered_rows_fall_back_to_lattice_bins():
+        h5, info = write_startup_case(os.path.join(tmp, "su_dis"), jitter=0.45)
+        rc, out, err, od = prof(h5)
+        expect(rc == 0, f"exit {rc}", out + err)
+        expect("rows: lattice bins (rows too disordered to cluster) in 5 frame(s)" in out,
+               "fallback not reported", out)
+        check_profile(read_csv_rows(os.path.join(od, "startup_synth_profiles.csv")), info, 4,
+                      10 * DX, [9, 10], label="disordered")
+        check_centreline(os.path.join(od, "startup_synth_centreline.csv"), info, [19, 20])
+
+    @t
+    def profiles_newtonian_velocity_only():
+        h5, info = write_startup_case(os.path.join(tmp, "su_newt"), stress=False)
+        rc, out, err, od = prof(h5, png=True)
+        expect(rc == 0, f"exit {rc}", out + err)
+        expect("no extra_stress in the frames" in out and "Newtonian" in out,
+               "missing-stress note", out)
+        rows = read_csv_rows(os.path.join(od, "startup_synth_profiles.csv"))
+        expect(list(rows[0].keys()) == ["station_x_m", "time_s", "frame", "y_m", "Y", "vx_m_s",
+                                        "count"], f"header {list(rows[0].keys())}")
+        check_profile(rows, info, 4, 10 * DX, [9, 10], stress=False, label="newtonian")
+        check_centreline(os.path.join(od, "startup_synth_centreline.csv"), info, [19, 20],
+                         stress=False)
+        for f in ("startup_synth_centreline.png", "startup_synth_profiles.png"):
+            with open(os.path.join(od, f), "rb") as fh:
+                expect(fh.read(8) == b"\x89PNG\r\n\x1a\n", f"{f} not written")
+
+    @t
+    def profiles_3d_stress_components():
+        h5, info = write_startup_case(os.path.join(tmp, "su_3d"), dim=3)
+        rc, out, err, od = prof(h5)
+        expect(rc == 0, f"exit {rc}", out + err)
+        check_profile(read_csv_rows(os.path.join(od, "startup_synth_profiles.csv")), info, 4,
+                      10 * DX, [9, 10], label="3d")
+        check_centreline(os.path.join(od, "startup_synth_centreline.csv"), info, [19, 20])
+
+    @t
+    def profiles_png_and_summary():
+        od = os.path.join(tmp, "prof_png")
+        rc, out, err = tool("startup_channel_profiles.py", h5_su, "--out-dir", od,
+                            "--prefix", "run1", "--times", "0.1,0.4", "--stations",
+                            f"{2.5 * DX!r},{10 * DX!r}")
+        expect(rc == 0, f"exit {rc}", out + err)
+        for f in ("run1_centreline.csv", "run1_profiles.csv", "run1_centreline.png",
+                  "run1_profiles.png"):
+            expect(f"wrote {os.path.join(od, f)}" in out, f"{f} not reported", out)
+            expect(os.path.getsize(os.path.join(od, f)) > 0, f"{f} empty")
+        # summary: one line per station and time with rows, particles and counts
+        expect(re.search(r"\n\s+6\.25e-05\s+0\.1\s+000001\s+40\s+40\s+1\s", out),
+               "summary line for x = 2.5 dx, t = 0.1", out)
+        expect(re.search(r"\n\s+0\.00025\s+0\.4\s+000004\s+40\s+80\s+2\s", out),
+               "summary line for x = 10 dx, t = 0.4", out)
+
+    @t
+    def profiles_errors():
+        def bad(args, rc_expected, needle):
+            rc, out, err = tool("startup_channel_profiles.py", *args, "--out-dir",
+                                os.path.join(tmp, "prof_err"), "--no-png")
+            expect(rc == rc_expected, f"{args}: exit {rc}, expected {rc_expected}", out + err)
+            expect(needle in err, f"{args}: message {needle!r} missing", out + err)
+
+        bad([os.path.join(tmp, "nonexistent.h5")], 1, "no such file")
+        txt = os.path.join(tmp, "not_hdf5.h5")
+        with open(txt, "w") as fh:
+            fh.write("hello\n")
+        bad([txt], 1, "is not an HDF5 file")
+        other = os.path.join(tmp, "other.h5")
+        with h5py.File(other, "w") as f:
+            f["data"] = np.zeros(3)
+        bad([other], 1, "is not a vesph output: root attribute 'format' is missing")
+        h5, _ = write_startup_case(os.path.join(tmp, "su_nofluid"), no_fluid=True)
+        bad([h5], 1, "has no fluid particles")
+        bad([h5_su, "--stations", repr(30 * DX)], 2,
+            "station x = 0.00075 m is outside the channel, x in [0, 0.0005] m")
+        bad([h5_su, "--stations=-1e-5"], 2, "is outside the channel")
+        bad([h5_su, "--times", "0.5"], 2, "time 0.5 s is outside the output range [0, 0.4] s")
+        bad([h5_su, "--stations", "a,b"], 2, "expected comma-separated numbers")
+        bad([h5_su, "--times", "0.1", "--all-times"], 2, "not allowed with argument")
+        bad([h5_su, "--bin-width", "0"], 2, "--bin-width must be > 0")
+
     # ---- ParaView (optional)
     @t
     def paraview_reads_synthetic_xdmf():
@@ -624,6 +963,533 @@ def make_tests(tmp):
     return T
 
 
+# ------------------------------------------------------------- XPP (tools/xpp_steady_shear.py)
+XPP_SCENE = """\
+name = "startup_channel_xpp"
+dimension = 2
+[domain]
+min = [0.0, -1.25e-4]
+max = [1.0e-4, 1.125e-3]
+periodic = [true, false]
+[particles]
+spacing = 2.5e-5
+[fluid]
+density = 1000.0
+viscosity = 2.0e-4
+[[blocks]]
+kind = "fluid"
+min = [0.0, 0.0]
+max = [1.0e-4, 1.0e-3]
+[[blocks]]
+kind = "wall"
+min = [0.0, -1.25e-4]
+max = [1.0e-4, 0.0]
+[effects.viscosity]
+[effects.xpp]
+polymer_viscosity = 8.0e-4
+backbone_relaxation_time = 0.5
+relaxation_ratio = 3.0
+arms = 4
+anisotropy = 0.15
+[effects.body_force]
+acceleration = [4.1e-3, 0.0]
+"""
+
+
+def write_xpp_channel(path, t_end=4.0, dt_frame=0.25, n1d=48, perturb=None):
+    """A synthetic XPP start-up channel (4 x 40 fluid particles on a 2.5e-5 m lattice, one wall
+    row) whose fields are the 1-D start-up of xpp_steady_shear at n1d cells, interpolated to
+    the particles (T_xy = eta_s dv/dy + tau_xy). perturb(k, frame) may alter frame k."""
+    import tomllib
+    import xpp_steady_shear as X
+    scene = tomllib.loads(XPP_SCENE)
+    p, rho, F, y0, y1 = X.scene_parameters(scene)
+    times = np.arange(0.0, t_end + 1e-9, dt_frame)
+    yc, v, tau, yf = X.startup_1d(p, rho, F, y0, y1, times, n=n1d)
+    xs = (np.arange(4) + 0.5) * 2.5e-5
+    ys = (np.arange(40) + 0.5) * 2.5e-5
+    Xg, Yg = np.meshgrid(xs, ys)
+    pos = np.column_stack([Xg.ravel(), Yg.ravel()])
+    wall = np.column_stack([xs, np.full(4, -1.25e-5)])
+    pos = np.vstack([pos, wall])
+    kind = np.concatenate([np.zeros(160, np.uint8), np.ones(4, np.uint8)])
+    y = pos[:160, 1]
+    with h5py.File(path, "w") as f:
+        f.attrs["format"] = "vesph-1"
+        f.attrs["dim"] = np.int64(2)
+        f.attrs["scene"] = XPP_SCENE
+        f.attrs["dx"] = np.float64(2.5e-5)
+        for k, t in enumerate(times):
+            vk = np.concatenate([[-v[k][0]], v[k], [-v[k][-1]]])
+            g_faces = np.diff(vk) / (yc[1] - yc[0])
+            vel = np.zeros((164, 2))
+            vel[:160, 0] = np.interp(y, yc, v[k])
+            T = np.zeros((164, 3))
+            T[:160, 0] = np.interp(y, yf, tau[k, 0])
+            T[:160, 1] = np.interp(y, yf, p.eta_s * g_faces + tau[k, 1])
+            T[:160, 2] = np.interp(y, yf, tau[k, 2])
+            zz = np.zeros(164)
+            zz[:160] = np.interp(y, yf, tau[k, 3])
+            fr = {"velocity": vel, "extra_stress": T, "extra_stress_zz": zz}
+            if perturb:
+                perturb(k, len(times), fr)
+            g = f.create_group(f"frames/{k:06d}")
+            g.attrs["time"] = np.float64(t)
+            g.attrs["step"] = np.int64(k)
+            g.create_dataset("position", data=pos)
+            g.create_dataset("kind", data=kind)
+            for name, arr in fr.items():
+                g.create_dataset(name, data=arr)
+    return path
+
+
+def make_xpp_tests(tmp):
+    import xpp_steady_shear as X
+    T = []
+
+    def t(fn):
+        T.append((fn.__name__, fn))
+        return fn
+
+    P = X.Xpp(G=1.6e-3, lam_b=0.5, r=3.0, q=4, alpha=0.15, eta_s=2e-4)
+
+    @t
+    def xpp_small_rate_limit_is_oldroyd_b():
+        # Wi = 1e-3: tau_xy = eta_p gdot, N1 = 2 eta_p lambda_0b gdot^2 (Oldroyd-B/UCM),
+        # N2 = -alpha eta_p lambda_0b gdot^2, to O(Wi^2)
+        g = 1e-3 / P.lam_b
+        x = X.steady_shear(g, P)
+        expect(abs(x[1] / (P.eta_p * g) - 1) < 1e-5, f"eta {x[1]/g} vs eta_p {P.eta_p}")
+        expect(abs((x[0] - x[2]) / (2 * P.eta_p * P.lam_b * g * g) - 1) < 1e-4, f"Psi1 {x}")
+        expect(abs((x[2] - x[3]) / (-P.alpha * P.eta_p * P.lam_b * g * g) - 1) < 1e-3, f"Psi2 {x}")
+        # and at Wi = 2 it is clearly not Oldroyd-B (shear thinning)
+        x = X.steady_shear(2 / P.lam_b, P)
+        expect(x[1] < 0.8 * P.eta_p * 2 / P.lam_b, "no shear thinning at Wi = 2")
+
+    @t
+    def xpp_ode_and_algebraic_routes_agree():
+        for p in (P, X.Xpp(1.0, 1.0, 2.0, 2, 0.0), X.Xpp(1.0, 1.0, 5.0, 10, 0.3)):
+            for wi in (0.3, 2.0, 8.0):
+                a = X.steady_shear(wi / p.lam_b, p)
+                b = X.steady_shear_ode(wi / p.lam_b, p)
+                expect(np.max(np.abs(a - b)) < 1e-8 * np.max(np.abs(a)), f"Wi {wi}: {a} vs {b}")
+                r = X.shear_residual(a, wi / p.lam_b, p)
+                expect(np.max(np.abs(r)) * p.lam_b < 1e-10 * p.G, f"residual {r}")
+                if p.alpha == 0:
+                    expect(abs(a[2] - a[3]) < 1e-12 * p.G, "N2 != 0 with alpha = 0")
+                expect(abs(a[3]) > 1e-3 * abs(a[2]), "tau_zz = 0")
+
+    @t
+    def xpp_flow_curve_inversion_and_channel_velocity():
+        curve = X.FlowCurve(P, 10.0)
+        for T_ in (1e-6, 3e-4, 1.2e-3, 2.5e-3):
+            g = curve.rate_at_stress(T_)
+            x = X.steady_shear(float(g), P)
+            expect(abs(P.eta_s * g + x[1] - T_) < 1e-6 * T_, f"stress at the inverted rate, T = {T_}")
+            expect(np.max(np.abs(curve.tau_at_rate(g) - x)) < 1e-6 * np.max(np.abs(x)), "tau at rate")
+        from scipy.integrate import quad
+        rho, F, a = 1000.0, 4.1e-3, 5e-4
+        ref = X.channel_reference(np.array([0.3e-3, a]), P, rho, F, 0.0, 2 * a, curve=curve)
+        for k, yy in enumerate((0.3e-3, a)):
+            vq = quad(lambda s: float(curve.rate_at_stress(-rho * F * (s - a))), 0, yy, limit=200)[0]
+            expect(abs(ref["v"][k] - vq) < 1e-6 * vq, f"v({yy}) {ref['v'][k]} vs {vq}")
+
+    @t
+    def xpp_startup_1d_converges_to_the_steady_channel():
+        rho, F, a = 1000.0, 4.1e-3, 5e-4
+        ref = X.channel_reference(np.array([a]), P, rho, F, 0.0, 2 * a)
+        yc, v, tau, yf = X.startup_1d(P, rho, F, 0.0, 2 * a, [0.0, 20 * P.lam_b], n=32)
+        vc = np.interp(a, yc, v[-1])
+        expect(abs(vc / ref["v"][0] - 1) < 2e-3, f"1-D steady centreline {vc} vs {ref['v'][0]}")
+        expect(np.max(np.abs(tau[-1, :, 0] - ref["curve"].tau_at_rate(ref["curve"].rate_at_stress(rho * F * a))))
+               < 2e-3 * P.G, "1-D wall stresses")
+
+    good = os.path.join(tmp, "xpp_good.h5")
+
+    @t
+    def xpp_check_passes_on_the_1d_startup():
+        write_xpp_channel(good)
+        rc, out, err = tool("xpp_steady_shear.py", "check", good, "--transient", "--n1d", "32",
+                            "--csv", good + ".csv", "--png", good + ".png",
+                            "--transient-csv", good + ".t.csv", "--transient-png", good + ".t.png")
+        expect(rc == 0 and "RESULT: PASS" in out, f"exit {rc}", out + err)
+        for f_ in (".csv", ".png", ".t.csv", ".t.png"):
+            expect(os.path.getsize(good + f_) > 0, f"no {f_}")
+        expect("tau_zz" in out and "N2" in out, "tau_zz/N2 not compared", out)
+
+    @t
+    def xpp_check_fails_on_a_wrong_tau_zz():
+        def bad(k, n, fr):
+            if k == n - 1:
+                fr["extra_stress_zz"] *= 1.05
+        path = write_xpp_channel(os.path.join(tmp, "xpp_zz.h5"), perturb=bad)
+        rc, out, err = tool("xpp_steady_shear.py", "check", path, "--n1d", "32")
+        expect(rc == 1 and re.search(r"tau_zz .*FAIL", out) is not None, f"exit {rc}", out + err)
+
+    @t
+    def xpp_check_fails_on_an_oscillating_startup():
+        def bad(k, n, fr):
+            if 2 <= k < n - 1:
+                fr["velocity"][:, 0] *= 1.0 + 0.01 * (-1) ** k
+        path = write_xpp_channel(os.path.join(tmp, "xpp_osc.h5"), perturb=bad)
+        rc, out, err = tool("xpp_steady_shear.py", "check", path, "--transient", "--n1d", "32")
+        expect(rc == 1 and re.search(r"centreline velocity .*FAIL", out) is not None, f"exit {rc}", out + err)
+        rc, out, err = tool("xpp_steady_shear.py", "check", path, "--n1d", "32")
+        expect(rc == 0, "the steady check alone should pass", out + err)
+
+    @t
+    def xpp_check_fails_before_the_steady_state():
+        path = write_xpp_channel(os.path.join(tmp, "xpp_early.h5"), t_end=1.0)
+        rc, out, err = tool("xpp_steady_shear.py", "check", path, "--n1d", "32")
+        expect(rc == 1 and "not steady" in out, f"exit {rc}", out + err)
+
+    @t
+    def xpp_check_rejects_a_scene_without_xpp():
+        h5 = write_channel_case(os.path.join(tmp, "xpp_newtonian"))
+        rc, out, err = tool("xpp_steady_shear.py", "check", h5)
+        expect(rc == 2 and "effects.xpp" in out, f"exit {rc}", out + err)
+
+    return T
+
+
+# ------------------------------------------------------- drop_measure.py tests
+DROP_DX, DROP_RHO = 1.0e-3, 1000.0
+DROP_SCENE = """\
+name = "{name}"
+dimension = {dim}
+[domain]
+min = {dmin}
+max = {dmax}
+[particles]
+spacing = 1.0e-3
+kernel = "cubic"
+smoothing_ratio = 1.5
+[fluid]
+density = 1000.0
+viscosity = 0.4
+[[blocks]]
+kind = "fluid"
+{fluid}
+[[blocks]]
+kind = "wall"
+min = {wmin}
+max = {wmax}
+[effects.continuity]
+[time]
+end = 0.04
+"""
+
+
+def drop_scene(name="drop_synth", dim=2, shape="disk", wall=True):
+    """A drop scene: a disk (sphere) of D = 0.02 m (20 dx) at centre y = 0.015 m (3D: 0.006 m,
+    D = 0.008 m), V = -1 m/s, the wall top at y = 0."""
+    if dim == 2:
+        fluid = ('shape = "disk"\ncentre = [0.0, 0.015]\ndiameter = 0.02\n'
+                 'velocity = [0.0, -1.0]')
+        if shape == "box":
+            fluid = 'min = [-0.01, 0.005]\nmax = [0.01, 0.025]\nvelocity = [0.0, -1.0]'
+        s = DROP_SCENE.format(name=name, dim=2, dmin="[-0.06, -0.003]", dmax="[0.06, 0.04]",
+                              fluid=fluid, wmin="[-0.05, -0.003]", wmax="[0.05, 0.0]")
+    else:
+        fluid = ('shape = "sphere"\ncentre = [0.0, 0.006, 0.0]\ndiameter = 0.008\n'
+                 'velocity = [0.0, -1.0, 0.0]')
+        s = DROP_SCENE.format(name=name, dim=3, dmin="[-0.02, -0.003, -0.02]",
+                              dmax="[0.02, 0.02, 0.02]", fluid=fluid,
+                              wmin="[-0.02, -0.003, -0.02]", wmax="[0.02, 0.0, 0.02]")
+    if not wall:
+        s = s[:s.index('[[blocks]]\nkind = "wall"')] + "[effects.continuity]\n"
+    return s
+
+
+def drop_lattice(R=10, centre=(0.0, 0.015), dim=2):
+    """Lattice disk (sphere) of radius R dx: the nodes centre + k dx within the radius."""
+    k = np.arange(-R, R + 1)
+    K = np.stack(np.meshgrid(*([k] * dim), indexing="ij"), axis=-1).reshape(-1, dim)
+    K = K[np.sum(K * K, axis=1) <= R * R]
+    return np.asarray(centre, dtype=float) + K * DROP_DX, K
+
+
+def write_drop(path, frames, scene=None, dim=2):
+    """frames: list of (time [s], fluid positions [n, dim], optional density factor array or
+    scalar). Wall particles: one row at y = -dx/2. mass = rho dx^dim."""
+    scene = scene or drop_scene(dim=dim)
+    if dim == 2:
+        wx = (np.arange(-40, 40) + 0.5) * DROP_DX
+        wall = np.column_stack([wx, np.full(len(wx), -0.5 * DROP_DX)])
+    else:
+        wx = (np.arange(-8, 8) + 0.5) * DROP_DX
+        X, Z = np.meshgrid(wx, wx)
+        wall = np.column_stack([X.ravel(), np.full(X.size, -0.5 * DROP_DX), Z.ravel()])
+    with h5py.File(path, "w") as f:
+        f.attrs["format"] = "vesph-1"
+        f.attrs["dim"] = np.int64(dim)
+        f.attrs["scene"] = scene
+        f.attrs["dx"] = np.float64(DROP_DX)
+        for i, fr in enumerate(frames):
+            t, fl = fr[0], np.asarray(fr[1], dtype=float)
+            scale = fr[2] if len(fr) > 2 else 1.0
+            n, nw = len(fl), len(wall)
+            g = f.create_group(f"frames/{i:06d}")
+            g.attrs["time"] = np.float64(t)
+            g.attrs["step"] = np.int64(10 * i)
+            g.create_dataset("position", data=np.vstack([fl, wall]))
+            g.create_dataset("velocity", data=np.zeros((n + nw, dim)))
+            g.create_dataset("kind", data=np.concatenate([np.zeros(n, np.uint8),
+                                                          np.ones(nw, np.uint8)]))
+            g.create_dataset("id", data=np.arange(n + nw, dtype=np.uint64))
+            rho = np.full(n + nw, DROP_RHO)
+            rho[:n] *= scale
+            g.create_dataset("density", data=rho)
+            g.create_dataset("mass", data=np.full(n + nw, DROP_RHO * DROP_DX ** dim))
+    return path
+
+
+def make_drop_tests(tmp):
+    T = []
+
+    def t(fn):
+        T.append((fn.__name__, fn))
+        return fn
+
+    d = os.path.join(tmp, "drop")
+    os.makedirs(d, exist_ok=True)
+    dx = DROP_DX
+    disk, K = drop_lattice()                 # R = 10 dx: 317 particles, width 20 dx = D
+    N = len(disk)
+
+    def measure(path, *args):
+        """Run the tool (no PNG unless "--png" is among args); (rc, out, err, CSV rows)."""
+        png = "--png" in args
+        args = [x for x in args if x != "--png"] + ([] if png else ["--no-png"])
+        rc, out, err = tool("drop_measure.py", path, "--out-dir", d, "--prefix",
+                            os.path.splitext(os.path.basename(path))[0], *args)
+        csvp = os.path.join(d, os.path.splitext(os.path.basename(path))[0] + "_drop.csv")
+        rows = read_csv_rows(csvp) if rc in (0, 1) and os.path.exists(csvp) else []
+        return rc, out, err, rows
+
+    def near(v, ref, tol=1e-9):
+        return abs(float(v) - ref) <= tol * max(1.0, abs(ref))
+
+    @t
+    def drop_lattice_disk_width_height_area():
+        # frame 0: the disk; 1: translated down by V t; 2: a flattened blob on the wall, bottom
+        # row of 30 particles at 0.6 dx, 5 rows of 40 above (contact 29 dx, width 39 dx)
+        blob = [np.column_stack([(np.arange(30) - 14.5) * dx, np.full(30, 0.6 * dx)])]
+        for j in range(1, 6):
+            blob.append(np.column_stack([(np.arange(40) - 19.5) * dx,
+                                         np.full(40, (0.6 + j) * dx)]))
+        blob = np.vstack(blob)
+        h5 = write_drop(os.path.join(d, "lattice.h5"),
+                        [(0.0, disk), (0.003, disk - [0.0, 0.003]), (0.0125, blob)])
+        rc, out, err, rows = measure(h5, "--png")
+        expect(rc == 0 and len(rows) == 3, f"exit {rc}, {len(rows)} rows", out + err)
+        r0, r1, r2 = rows
+        for r, tvd in zip(rows, (0.0, 0.15, 0.625)):
+            expect(near(r["tV_over_D"], tvd), f"tV/D {r['tV_over_D']} != {tvd}")
+        expect(near(r0["width_m"], 0.02) and near(r0["width_over_D"], 1.0), f"width {r0}")
+        expect(near(r0["height_m"], 0.025) and near(r0["height_over_D"], 1.25), f"height {r0}")
+        expect(near(r1["height_over_D"], 1.1) and near(r1["width_over_D"], 1.0)
+               and r1["n_contact"] == "0", f"frame 1 {r1}")
+        area = N * dx * dx
+        expect(near(r0["volume_m2"], area), f"area {r0['volume_m2']} != {area}")
+        expect(near(r0["volume_rel_err_disk"], area / (math.pi * 1e-4) - 1, 1e-7),
+               f"error vs the disk {r0['volume_rel_err_disk']}")
+        expect(float(r0["volume_rel_err_first"]) == 0.0, "error vs the first frame")
+        expect(r0["n_contact"] == "0" and float(r0["contact_width_m"]) == 0.0, "contact at t=0")
+        expect(r0["clusters"] == "1" and r0["detached"] == "0" and r0["fractured"] == "0",
+               f"clusters {r0}")
+        expect(near(r0["max_nn_gap_over_dx"], 1.0) and float(r0["void_gap_over_dx"]) <= 1.5,
+               f"gaps {r0}")
+        expect(near(r2["width_m"], 39 * dx) and near(r2["contact_width_m"], 29 * dx)
+               and r2["n_contact"] == "30", f"blob widths {r2}")
+        expect(near(r2["height_m"], 5.6 * dx), f"blob height {r2['height_m']}")
+        expect(near(r2["volume_rel_err_first"], 230 / N - 1), "blob volume error")
+        expect(os.path.getsize(os.path.join(d, "lattice_drop.png")) > 0, "no PNG")
+        expect("first wall contact: t V/D = 0.625" in out, "contact time", out)
+
+    @t
+    def drop_split_disk_two_clusters():
+        half = disk[np.abs(K[:, 0]) > 1]            # columns -1, 0, 1 removed: gap 4 dx
+        h5 = write_drop(os.path.join(d, "split.h5"), [(0.0, disk), (0.01, half)])
+        rc, out, err, rows = measure(h5)
+        r = rows[1]
+        expect(r["clusters"] == "2" and r["detached"] == "0" and r["fractured"] == "1",
+               f"split frame {r}", out + err)
+        expect(near(r["largest_cluster_fraction"], 0.5), f"largest {r['largest_cluster_fraction']}")
+        expect(rows[0]["clusters"] == "1", "intact frame")
+        rc, out, err, _ = measure(h5, "--no-fracture")
+        expect(rc == 1 and "2 clusters" in out and "RESULT: FAIL" in out, f"exit {rc}", out + err)
+        rc, out, err, _ = measure(h5, "--expect-fracture")
+        expect(rc == 0 and "RESULT: PASS" in out, f"exit {rc}", out + err)
+        # a link longer than the gap joins the halves again
+        rc, out, err, rows = measure(h5, "--link", "4.5", "--max-gap", "10")
+        expect(rows[1]["clusters"] == "1", f"link 4.5: {rows[1]['clusters']} clusters")
+
+    @t
+    def drop_hole_void_gap():
+        holed = disk[np.sum(K * K, axis=1) > 16]    # hole of radius 4 dx
+        one = disk[np.any(K != 0, axis=1)]          # one missing particle
+        h5 = write_drop(os.path.join(d, "hole.h5"), [(0.0, disk), (0.005, one), (0.01, holed)])
+        rc, out, err, rows = measure(h5)
+        r1, r2 = rows[1], rows[2]
+        # the nearest particle to the centre is at sqrt(17) dx: empty circle 2 sqrt(17) dx
+        expect(abs(float(r2["void_gap_over_dx"]) - 2 * math.sqrt(17)) < 0.3,
+               f"void {r2['void_gap_over_dx']} != {2 * math.sqrt(17):.3f}", out)
+        expect(r2["clusters"] == "1" and r2["fractured"] == "1", f"hole frame {r2}")
+        expect(near(r2["max_nn_gap_over_dx"], 1.0), "a clean hole leaves the NN gap at 1")
+        expect(abs(float(r1["void_gap_over_dx"]) - 2.0) < 0.1 and r1["fractured"] == "0",
+               f"one missing particle: {r1}")
+        # void fraction: 0 intact; the hole (49 particles removed, 49 dx^2) less a rim of
+        # about 0.75 dx: ~ pi 3.4^2 dx^2 of the first frame's N dx^2
+        vf = float(r2["void_fraction"])
+        expect(float(rows[0]["void_fraction"]) == 0.0 and 30 / N < vf < 49 / N,
+               f"void fraction {vf * N:.1f} dx^2 not in (30, 49)")
+        rc, out, err, _ = measure(h5, "--no-fracture")
+        expect(rc == 1 and "void gap" in out, f"exit {rc}", out + err)
+        rc, out, err, _ = measure(h5, "--no-fracture", "--max-gap", "9")
+        expect(rc == 0, f"--max-gap 9: exit {rc}", out + err)
+        expect(float(r2["crack_fraction"]) == float(rows[0]["crack_fraction"]),
+               "an enclosed hole is no crack")
+
+    @t
+    def drop_open_crack_crack_fraction():
+        # a slot 3 columns wide from the top down to row -6: open to the outside, so no
+        # cluster split and no enclosed void; the closing (radius 3 dx) fills about
+        # 2.5 dx x 17 dx + the mouth ~ 47 dx^2, 15 % of the disk (the intact disk: 3 %)
+        slot = disk[~((np.abs(K[:, 0]) <= 1) & (K[:, 1] >= -6))]
+        h5 = write_drop(os.path.join(d, "slot.h5"), [(0.0, disk), (0.01, slot)])
+        rc, out, err, rows = measure(h5, "--no-fracture")
+        r0, r1 = rows
+        c0, c1 = float(r0["crack_fraction"]), float(r1["crack_fraction"])
+        expect(0.02 < c0 < 0.04 and r0["fractured"] == "0", f"intact disk: crack {c0}", out)
+        expect(0.12 < c1 < 0.18 and r1["clusters"] == "1"
+               and float(r1["void_gap_over_dx"]) <= 1.5 and r1["fractured"] == "1",
+               f"slot: {r1}", out)
+        expect(rc == 1 and "crack fraction" in out, f"--no-fracture: exit {rc}", out + err)
+        rc, out, err, rows = measure(h5, "--no-fracture", "--max-crack", "0.2")
+        expect(rc == 0, f"--max-crack 0.2: exit {rc}", out + err)
+        rc, out, err, rows = measure(h5, "--crack-radius", "1")
+        expect(float(rows[1]["crack_fraction"]) < 0.5 * c1,
+               f"a 1 dx closing does not fill the 2.5 dx slot: {rows[1]['crack_fraction']}")
+
+    @t
+    def drop_detached_particles():
+        singles = np.array([[0.040, 0.003], [0.045, 0.003], [0.052, 0.003]])   # NN 5, 5, 7 dx
+        pair = np.array([[-0.040, 0.003], [-0.039, 0.003]])                    # a 2-particle drop
+        h5 = write_drop(os.path.join(d, "detached.h5"),
+                        [(0.0, disk), (0.01, np.vstack([disk, singles])),
+                         (0.02, np.vstack([disk, singles, pair]))])
+        rc, out, err, rows = measure(h5)
+        r1, r2 = rows[1], rows[2]
+        expect(r1["clusters"] == "1" and r1["detached"] == "3" and r1["fractured"] == "0",
+               f"singles: {r1}", out + err)
+        expect(near(r1["largest_cluster_fraction"], N / (N + 3)), "largest fraction")
+        expect(near(r1["max_nn_gap_over_dx"], 7.0), f"NN gap {r1['max_nn_gap_over_dx']}")
+        expect(r2["clusters"] == "2" and r2["detached"] == "3" and r2["fractured"] == "1",
+               f"the 2-particle drop is a cluster: {r2}")
+        rc, out, err, _ = measure(h5, "--no-fracture", "--until", "0.75")
+        expect(rc == 0, f"detached particles alone are no fracture: exit {rc}", out + err)
+        rc, out, err, rows = measure(h5, "--min-cluster", "3", "--no-fracture")
+        r2 = rows[2]
+        expect(rc == 0 and r2["clusters"] == "1" and r2["detached"] == "5"
+               and r2["fractured"] == "0", f"--min-cluster 3: exit {rc}, {r2}", out + err)
+        rc, out, err, _ = measure(h5, "--no-fracture", "--until", "0.75", "--max-nn-gap", "3")
+        expect(rc == 1 and "NN gap 7" in out, f"--max-nn-gap: exit {rc}", out + err)
+
+    @t
+    def drop_volume_error_and_until():
+        split = disk[np.abs(K[:, 0]) > 1]
+        h5 = write_drop(os.path.join(d, "volume.h5"),
+                        [(0.0, disk), (0.01, disk, 1 / 1.02), (0.02, split)])
+        rc, out, err, rows = measure(h5)
+        expect(near(rows[1]["volume_rel_err_first"], 0.02, 1e-9),
+               f"volume error {rows[1]['volume_rel_err_first']}", out)
+        rc, out, err, _ = measure(h5, "--max-volume-error", "0.01", "--until", "0.5")
+        expect(rc == 1 and re.search(r"max 2 % at t V/D = 0\.5 .*FAIL", out) is not None,
+               f"exit {rc}", out + err)
+        rc, out, err, rows = measure(h5, "--max-volume-error", "0.03", "--no-fracture",
+                                     "--until", "0.75")
+        expect(rc == 0 and len(rows) == 2, f"--until 0.75: exit {rc}, {len(rows)} rows",
+               out + err)
+        rc, out, err, _ = measure(h5, "--no-fracture")
+        expect(rc == 1, f"the split at t V/D = 1 is checked without --until: exit {rc}", out)
+        rc, out, err, _ = measure(h5, "--expect-fracture", "--until", "0.75")
+        expect(rc == 1 and "no fractured frame" in out, f"exit {rc}", out + err)
+
+    @t
+    def drop_sphere_3d():
+        ball, _ = drop_lattice(R=4, centre=(0.0, 0.006, 0.0), dim=3)
+        h5 = write_drop(os.path.join(d, "ball.h5"), [(0.0, ball)],
+                        scene=drop_scene("ball", dim=3), dim=3)
+        # the staircase of a sphere of 8 dx fills 12 % under the crack closing
+        rc, out, err, rows = measure(h5, "--max-crack", "0.2")
+        r = rows[0]
+        expect(rc == 0 and near(r["width_over_D"], 1.0) and near(r["height_m"], 0.010),
+               f"3D: {r}", out + err)
+        vol = len(ball) * dx ** 3
+        expect(near(r["volume_m3"], vol)
+               and near(r["volume_rel_err_disk"], vol / (math.pi * 0.008 ** 3 / 6) - 1, 1e-7),
+               f"3D volume {r}")
+        expect(r["clusters"] == "1" and r["fractured"] == "0", f"3D clusters {r}")
+        # the cube centres of an intact lattice (sqrt(3)/2 dx from the particles) are no void
+        expect(float(r["void_fraction"]) == 0.0 and float(r["void_gap_over_dx"]) < 1.9,
+               f"3D void {r['void_gap_over_dx']}, fraction {r['void_fraction']}")
+
+    @t
+    def drop_compare_several_runs():
+        a = write_drop(os.path.join(d, "run_a.h5"), [(0.0, disk), (0.01, disk - [0, 0.01])],
+                       scene=drop_scene("drop_alpha"))
+        b = write_drop(os.path.join(d, "run_b.h5"),
+                       [(0.0, disk), (0.01, disk[np.abs(K[:, 0]) > 1])],
+                       scene=drop_scene("drop_beta"))
+        cd = os.path.join(d, "cmp")
+        rc, out, err = tool("drop_measure.py", a, "--compare", b, "--out-dir", cd, "--no-fracture")
+        expect(rc == 1 and "drop_alpha" in out and "drop_beta" in out, f"exit {rc}", out + err)
+        for f_ in ("drop_alpha_drop.csv", "drop_beta_drop.csv", "compare_drop.png"):
+            expect(os.path.getsize(os.path.join(cd, f_)) > 0, f"no {f_}")
+        expect(len(read_csv_rows(os.path.join(cd, "drop_beta_drop.csv"))) == 2, "beta rows")
+        # the same scene name twice: the directory name is appended, then _2
+        os.makedirs(os.path.join(d, "eps0"), exist_ok=True)
+        a2 = shutil.copy(a, os.path.join(d, "eps0", "run_a.h5"))
+        rc, out, err = tool("drop_measure.py", a, a2, a, "--out-dir", cd, "--prefix", "same")
+        for f_ in ("drop_alpha_drop_drop.csv", "drop_alpha_eps0_drop.csv",
+                   "drop_alpha_drop_2_drop.csv", "same_drop.png"):
+            expect(rc == 0 and os.path.exists(os.path.join(cd, f_)), f"exit {rc}, no {f_}",
+                   out + err)
+
+    @t
+    def drop_errors():
+        rc, out, err = tool("drop_measure.py", os.path.join(d, "missing.h5"))
+        expect(rc == 1 and "no such file" in err, f"missing: exit {rc}", out + err)
+        txt = os.path.join(d, "text.h5")
+        with open(txt, "w") as fh:
+            fh.write("not hdf5\n")
+        rc, out, err = tool("drop_measure.py", txt)
+        expect(rc == 1 and "not an HDF5 file" in err, f"text: exit {rc}", out + err)
+        plain = os.path.join(d, "plain.h5")
+        with h5py.File(plain, "w") as f:
+            f.attrs["dim"] = 2
+        rc, out, err = tool("drop_measure.py", plain)
+        expect(rc == 1 and "not a vesph output" in err, f"plain: exit {rc}", out + err)
+        box = write_drop(os.path.join(d, "box.h5"), [(0.0, disk)], scene=drop_scene(shape="box"))
+        rc, out, err = tool("drop_measure.py", box)
+        expect(rc == 1 and "no disk fluid block" in err, f"box: exit {rc}", out + err)
+        nowall = write_drop(os.path.join(d, "nowall.h5"), [(0.0, disk)],
+                            scene=drop_scene(wall=False))
+        rc, out, err = tool("drop_measure.py", nowall, "--no-png")
+        expect(rc == 1 and "--wall-y" in err, f"no wall: exit {rc}", out + err)
+        rc, out, err = tool("drop_measure.py", nowall, "--no-png", "--wall-y", "0.005")
+        expect(rc == 0, f"--wall-y: exit {rc}", out + err)
+        rows = read_csv_rows(os.path.join(d, "drop_synth_drop.csv"))
+        expect(near(rows[0]["height_m"], 0.02), f"--wall-y height {rows[0]['height_m']}")
+        rc, out, err = tool("drop_measure.py")
+        expect(rc == 2, f"no file: exit {rc}", out + err)
+        rc, out, err = tool("drop_measure.py", box, "--no-fracture", "--expect-fracture")
+        expect(rc == 2, f"exclusive checks: exit {rc}", out + err)
+
+    return T
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--keep", metavar="DIR", help="keep the synthetic outputs in DIR")
@@ -639,7 +1505,7 @@ def main():
     os.makedirs(tmp, exist_ok=True)
     r = Runner()
     try:
-        for name, fn in make_tests(tmp):
+        for name, fn in make_tests(tmp) + make_xpp_tests(tmp) + make_drop_tests(tmp):
             r.run(name, fn)
     finally:
         if not a.keep:

@@ -18,12 +18,13 @@
 namespace vesph {
 namespace {
 
-template <int D>
-class PressureGradient final : public PairEffect<D, PressureGradient<D>> {
+// Mirror: whether the scene asked for the free-surface mirror; a template parameter so that
+// scenes without it run the pair loop of before, with no per-pair test.
+template <int D, bool Mirror>
+class PressureGradientT final : public PairEffect<D, PressureGradientT<D, Mirror>> {
  public:
-  explicit PressureGradient(ConfigTable& cfg)
-      : symmetric_(cfg.choice("form", "symmetric", {"symmetric", "difference"}) == "symmetric"),
-        mirror_(cfg.boolean("free_surface_mirror", false)) {}
+  explicit PressureGradientT(ConfigTable& cfg)
+      : symmetric_(cfg.choice("form", "symmetric", {"symmetric", "difference"}) == "symmetric") {}
   std::string_view name() const override { return "pressure_gradient"; }
   Phase phase() const override { return Phase::forces; }
   std::string_view form() const override { return symmetric_ ? "symmetric" : "difference"; }
@@ -33,7 +34,7 @@ class PressureGradient final : public PairEffect<D, PressureGradient<D>> {
     if (!pressure_)
       throw InputError("effects.pressure_gradient needs the particle pressure, which nothing in this "
                        "scene provides: add [effects.equation_of_state] (weakly compressible SPH)");
-    if (mirror_) {
+    if constexpr (Mirror) {
       surface_ = s.particles.fields.find("free_surface");
       if (!surface_)
         throw InputError("effects.pressure_gradient.free_surface_mirror needs the free-surface flags: add "
@@ -53,14 +54,15 @@ class PressureGradient final : public PairEffect<D, PressureGradient<D>> {
   Local begin(const RhsContext<D>& ctx, Index i) const {
     const ParticleSet<D>& ps = ctx.particles;
     const double p = pressure_->data[i], rho = ps.density[i];
-    const bool surface = surface_ && surface_->data[i] > 0.5;
+    bool surface = false;
+    if constexpr (Mirror) surface = surface_->data[i] > 0.5;
     return {Vec<D>::Zero(), surface, p, rho, p / (rho * rho), pressure_->data.data(), ps.density.data(), ps.mass.data()};
   }
   void pair(const RhsContext<D>&, Index, const Neighbour<D>& nb, Local& l) const {
     const double pj = l.p[nb.j], inv_rhoj = 1.0 / l.rho[nb.j], mj = l.m[nb.j];
-    const double coef = l.surface    ? 2.0 * mj * inv_rhoj * pj / l.rhoi
-                        : symmetric_ ? mj * (l.pi_over_rho2 + pj * inv_rhoj * inv_rhoj)
-                                     : mj * inv_rhoj * (pj - l.pi) / l.rhoi;
+    double coef = symmetric_ ? mj * (l.pi_over_rho2 + pj * inv_rhoj * inv_rhoj) : mj * inv_rhoj * (pj - l.pi) / l.rhoi;
+    if constexpr (Mirror)
+      if (l.surface) coef = 2.0 * mj * inv_rhoj * pj / l.rhoi;
     l.acc -= (coef * nb.F) * nb.rij;
   }
   void end(const RhsContext<D>& ctx, Index i, Local& l) const {
@@ -68,11 +70,18 @@ class PressureGradient final : public PairEffect<D, PressureGradient<D>> {
   }
 
  private:
-  bool symmetric_, mirror_;
+  bool symmetric_;
   const Field* pressure_ = nullptr;
   const Field* surface_ = nullptr;
 };
 
 }  // namespace
-VESPH_EFFECT_FACTORY(makePressureGradient, PressureGradient)
+
+template <int D>
+std::unique_ptr<Effect<D>> makePressureGradient(ConfigTable& cfg) {
+  if (cfg.boolean("free_surface_mirror", false)) return std::make_unique<PressureGradientT<D, true>>(cfg);
+  return std::make_unique<PressureGradientT<D, false>>(cfg);
+}
+template std::unique_ptr<Effect<2>> makePressureGradient<2>(ConfigTable&);
+template std::unique_ptr<Effect<3>> makePressureGradient<3>(ConfigTable&);
 }  // namespace vesph

@@ -14,7 +14,11 @@ namespace vesph {
   X(oldroyd_b, makeOldroydB, "Oldroyd-B elastic stress, Fang et al. eq. (28) (relaxation_time, polymer_viscosity)") \
   X(ucm, makeUcm, "upper-convected Maxwell: Oldroyd-B without solvent viscosity")                  \
   X(second_order_fluid, makeSecondOrderFluid, "second-order fluid, thesis eqs. (2.2)/(2.3), Table 2-1 (alpha1, alpha2, form, derivative, procedure)") \
-  X(xpp, makeXpp, "single-equation eXtended Pom-Pom, Verbeeten et al. 2001 (backbone_relaxation_time, modulus, arms, ...)")
+  X(xpp, makeXpp, "single-equation eXtended Pom-Pom, Verbeeten et al. 2001 (backbone_relaxation_time, modulus, arms, ...)") \
+  X(artificial_viscosity, makeArtificialViscosity, "Monaghan artificial viscosity, Fang et al. eqs. (30)-(37) (alpha, beta)") \
+  X(xsph, makeXsph, "XSPH particle movement, thesis 3.6 (epsilon, form)")                         \
+  X(artificial_stress, makeArtificialStress, "artificial stress against the tensile instability, Fang et al. eqs. (38)-(44) (epsilon, exponent)") \
+  X(free_surface, makeFreeSurface, "free-surface particles by number density n_i <= threshold n_ref, thesis §4.2")
 
 #define VESPH_DECLARE(NAME, FN, SUMMARY) \
   template <int D>                       \

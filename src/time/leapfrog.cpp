@@ -30,24 +30,27 @@ class Leapfrog final : public FixedStepIntegrator {
     double* f = rate_.data();
     std::vector<double>& old = work_;  // holds v^n (and S^n) during the step
     // Predictor: everything to the half step.
-#pragma omp parallel for schedule(static) if (n_ >= kParallelMinimum)
+#pragma omp parallel for schedule(static) if (n_ >= kParallelMinimumValues)
     for (std::size_t k = 0; k < n_; ++k) {
       if (k >= s.velocity_begin) old[k] = y[k];
       y[k] += 0.5 * dt * f[k];
     }
     evaluate(t_ + 0.5 * dt, y, f);  // f^{n+1/2}
     // Velocities and evolving fields: full step from the old values with f^{n+1/2};
-    // positions: corrector with v^{n+1}.
+    // positions: corrector with v^{n+1}, plus the part of dx/dt that is not v (XSPH,
+    // src/physics/xsph.cpp) as evaluated at the half step: dx/dt - v there. Without such an
+    // effect dx/dt is a copy of v and that part is exactly zero.
     const std::size_t nm = n_ - s.velocity_begin, nv = s.velocity_end - s.velocity_begin;
-#pragma omp parallel for schedule(static) if (nm >= kParallelMinimum)
+#pragma omp parallel for schedule(static) if (nm >= kParallelMinimumValues)
     for (std::size_t k = 0; k < nm; ++k) {
       const std::size_t kv = s.velocity_begin + k;
+      const double drift = k < nv ? f[s.position_begin + k] - y[kv] : 0.0;  // y[kv] = v^{n+1/2}
       y[kv] = old[kv] + dt * f[kv];
-      if (k < nv) y[s.position_begin + k] += 0.5 * dt * y[kv];
+      if (k < nv) y[s.position_begin + k] += 0.5 * dt * (y[kv] + drift);
     }
     // Density: keep rho^{n+1/2}, evaluate k^{n+1}, then correct.
     evaluate(t_ + dt, y, f);
-#pragma omp parallel for schedule(static) if (n_ >= kParallelMinimum)
+#pragma omp parallel for schedule(static) if (n_ >= kParallelMinimumValues)
     for (std::size_t k = s.position_end; k < s.velocity_begin; ++k) y[k] += 0.5 * dt * f[k];
   }
 };
@@ -66,13 +69,13 @@ class Midpoint final : public FixedStepIntegrator {
     double* y = y_;
     double* f = rate_.data();
     std::vector<double>& y0 = work_;
-#pragma omp parallel for schedule(static) if (n_ >= kParallelMinimum)
+#pragma omp parallel for schedule(static) if (n_ >= kParallelMinimumValues)
     for (std::size_t k = 0; k < n_; ++k) {
       y0[k] = y[k];
       y[k] += 0.5 * dt * f[k];
     }
     evaluate(t_ + 0.5 * dt, y, f);
-#pragma omp parallel for schedule(static) if (n_ >= kParallelMinimum)
+#pragma omp parallel for schedule(static) if (n_ >= kParallelMinimumValues)
     for (std::size_t k = 0; k < n_; ++k) y[k] = y0[k] + dt * f[k];
     evaluate(t_ + dt, y, f);
   }

@@ -14,6 +14,10 @@ using Index = std::uint32_t;
 // the work, and on a loaded machine a barrier can wait for a descheduled thread for
 // milliseconds (a 1000-particle channel ran 7x slower on two contended threads than on one).
 inline constexpr std::size_t kParallelMinimum = 4096;
+// Loops over plain state values (copies, axpy: a few flops per value) go parallel only above
+// this many values; below it the OpenMP fork/join costs more than the loop, and on a loaded
+// machine much more.
+constexpr std::size_t kParallelMinimumValues = std::size_t{1} << 17;
 
 template <int D>
 using Vec = Eigen::Matrix<double, D, 1>;

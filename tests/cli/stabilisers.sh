@@ -1,0 +1,46 @@
+# The stabilisers (artificial_viscosity, xsph, artificial_stress) switched on in existing scenes
+# by --set: each runs a short Poiseuille channel to the end with valid output, the artificial
+# stress also the Oldroyd-B channel (elastic stress on fluid and wall particles); `check` prints
+# their defaults; bad keys and missing prerequisites exit 2 with a message naming the key.
+. "$(dirname "$0")/lib.sh"
+S=$SCENE
+OB=$SRC/cases/startup_channel_oldroyd_b.toml
+SHORT="--set time.end=0.01 --set output.times=[0.01]"
+run_ok() {  # run_ok NAME SCENE --set ...: runs to the end and writes a valid file
+  name=$1; scene=$2; shift 2
+  # shellcheck disable=SC2086
+  expect 0 "ok: finished" -- "$VESPH" run "$scene" -o "$WORK/$name" --quiet $SHORT "$@"
+  $PY "$SRC/tools/check_output.py" "$WORK/$name" >"$WORK/$name.log" 2>&1 && pass ||
+    fail "$name: output not valid: $(tail -3 "$WORK/$name.log")"
+}
+run_ok av "$S" --set 'effects.artificial_viscosity.alpha=1.0'
+run_ok xsph "$S" --set 'effects.xsph.epsilon=0.5'
+run_ok xsph_normalised "$S" --set 'effects.xsph.form="normalised"'
+run_ok as "$S" --set 'effects.artificial_stress.epsilon=0.3' --set 'effects.equation_of_state.reference_pressure=-1e-5'
+run_ok all "$S" --set 'effects.artificial_viscosity={}' --set 'effects.xsph={}' --set 'effects.artificial_stress={}'
+run_ok as_oldroyd_b "$OB" --set 'effects.artificial_stress={}' --set 'effects.artificial_viscosity={}'
+
+# defaults shown by check
+expect 0 "artificial_viscosity = \{ alpha = 1.0, beta = 2.0 \}" -- "$VESPH" check "$S" --set 'effects.artificial_viscosity={}'
+expect 0 "artificial_stress = \{ epsilon = 0.2[0-9]*, exponent = 4 \}" -- "$VESPH" check "$S" --set 'effects.artificial_stress={}'
+expect 0 "xsph = \{ epsilon = 0.5, form = 'monaghan' \}" -- "$VESPH" check "$S" --set 'effects.xsph={}'
+expect 0 "artificial_viscosity" -- "$VESPH" list
+for word in xsph artificial_stress; do
+  grep -q "$word" "$WORK/out" && pass || fail "vesph list does not mention $word"
+done
+
+# bad keys
+expect 2 "effects.artificial_viscosity.alpha: expected a non-negative number, got -1" -- "$VESPH" check "$S" --set effects.artificial_viscosity.alpha=-1
+expect 2 "effects.artificial_viscosity.beta: expected a non-negative number" -- "$VESPH" check "$S" --set effects.artificial_viscosity.beta=-2
+expect 2 "effects.xsph.epsilon: expected a number in \[0, 1\], got 1.5" -- "$VESPH" check "$S" --set effects.xsph.epsilon=1.5
+expect 2 "effects.xsph.form: expected one of: monaghan, normalised" -- "$VESPH" check "$S" --set 'effects.xsph.form="shepard"'
+expect 2 "unknown key 'effects.xsph.eps'" -- "$VESPH" check "$S" --set effects.xsph.eps=0.5
+expect 2 "effects.artificial_stress.epsilon: expected a number in \[0, 1\]" -- "$VESPH" check "$S" --set effects.artificial_stress.epsilon=-0.1
+expect 2 "effects.artificial_stress.exponent: expected an integer in \[1, 16\], got 0" -- "$VESPH" check "$S" --set effects.artificial_stress.exponent=0
+expect 2 "effects.artificial_stress.exponent: expected an integer" -- "$VESPH" check "$S" --set effects.artificial_stress.exponent=2.5
+expect 2 "W\(dx\) = 0" -- "$VESPH" check "$S" --set 'effects.artificial_stress={}' --set particles.smoothing_ratio=0.5 --set 'particles.kernel="cubic"'
+# prerequisites: the sound speed and the pressure come from the equation of state
+grep -v '^\[effects.equation_of_state\]\|^sound_speed\|^\[effects.pressure_gradient\]' "$S" > "$WORK/noeos.toml"
+expect 2 "noeos.toml: effects.artificial_viscosity needs the sound speed.*add \[effects.equation_of_state\]" -- "$VESPH" check "$WORK/noeos.toml" --set 'effects.artificial_viscosity={}'
+expect 2 "noeos.toml: effects.artificial_stress needs the particle pressure.*add \[effects.equation_of_state\]" -- "$VESPH" check "$WORK/noeos.toml" --set 'effects.artificial_stress={}'
+finish

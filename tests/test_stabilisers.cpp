@@ -1,0 +1,642 @@
+// The stabilisers: artificial viscosity (Fang et al. 2006 eqs. 30-37,
+// src/physics/artificial_viscosity.cpp), XSPH (thesis §3.6, src/physics/xsph.cpp) and the
+// artificial stress (Fang eqs. 38-44, include/vesph/physics/artificial_stress.hpp,
+// src/physics/artificial_stress.cpp), plus the Effect::prepare hook of the pair driver.
+//
+// Each effect is run inside a real SphSystem (the solver's right-hand side) built by hand from
+// a few particles or a lattice, with only [effects.equation_of_state] beside it (which sets the
+// pressure and sound speed but adds no force), so dv/dt and dx/dt - v are the effect's alone.
+// Reference values are computed here from Kernel::W / Kernel::dWdr and the printed equations.
+#include <doctest/doctest.h>
+
+#include <Eigen/Geometry>
+
+#include <cmath>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "vesph/physics/artificial_stress.hpp"
+#include "vesph/physics/registry.hpp"
+#include "vesph/sim/simulation.hpp"
+#include "vesph/sim/system.hpp"
+#include "vesph/time/integrator.hpp"
+
+using namespace vesph;
+
+namespace {
+
+constexpr double kRho0 = 1000.0;
+constexpr double kSound = 10.0;  // m/s
+
+// A hand-built SphSystem: add particles (moving first), then finish() and evaluate().
+template <int D>
+struct Box {
+  Config cfg;
+  SphSystem<D> sys;
+  double dx;
+  std::vector<double> y, ydot;
+
+  Box(const std::string& effects, double dx_, double h_over_dx, KernelType kt, double length, bool periodic)
+      : cfg(Config::fromString("[effects.equation_of_state]\nsound_speed = " + std::to_string(kSound) + "\n" + effects,
+                               "test")),
+        dx(dx_) {
+    sys.kernel = Kernel(kt, D, h_over_dx * dx);
+    sys.domain.lo = Vec<D>::Constant(periodic ? 0.0 : -length);
+    sys.domain.hi = Vec<D>::Constant(length);
+    for (int a = 0; a < D; ++a) sys.domain.periodic[a] = periodic;
+  }
+  double mass() const { return kRho0 * std::pow(dx, D); }
+  void add(const Vec<D>& x, const Vec<D>& v, double rho, double m, bool fixed = false) {
+    sys.particles.add(x, v, rho, m, fixed ? ParticleKind::wall : ParticleKind::fluid, sys.particles.size());
+    if (!fixed) sys.particles.n_moving = sys.particles.size();
+  }
+  // n^D lattice of spacing dx from the origin (cell centres), all moving, with velocity v(x).
+  template <class Fn>
+  void lattice(int n, Fn&& velocity) {
+    std::size_t total = 1;
+    for (int a = 0; a < D; ++a) total *= static_cast<std::size_t>(n);
+    for (std::size_t c = 0; c < total; ++c) {
+      std::size_t rem = c;
+      Vec<D> x;
+      for (int a = 0; a < D; ++a) {
+        x[a] = (static_cast<int>(rem % n) + 0.5) * dx;
+        rem /= n;
+      }
+      add(x, velocity(x), kRho0, mass());
+    }
+  }
+  void finish(std::vector<std::unique_ptr<Effect<D>>> extra = {}) {
+    ConfigTable root = cfg.root();
+    ConfigTable eff = root.table("effects");
+    sys.effects = makeEffects<D>(eff);
+    for (auto& e : extra) sys.effects.push_back(std::move(e));
+    cfg.rejectUnknownKeys();
+    sys.setup(dx, kRho0, 0.0, 0.1 * sys.kernel.supportRadius());
+    y.assign(sys.size(), 0.0);
+    ydot.assign(sys.size(), 0.0);
+    sys.pack(y.data());
+  }
+  void evaluate() {
+    sys.pack(y.data());
+    sys.evaluate(0.0, y.data(), ydot.data());
+  }
+  std::size_t n() const { return sys.particles.n_moving; }
+  Vec<D> dxdt(std::size_t i) const { return Eigen::Map<const Vec<D>>(ydot.data() + D * i); }
+  Vec<D> dvdt(std::size_t i) const { return Eigen::Map<const Vec<D>>(ydot.data() + n() * (D + 1) + D * i); }
+};
+
+// Jitters a periodic lattice and gives it random velocities, densities and masses (before
+// Box::finish, which builds the neighbour list).
+template <int D>
+void disorder(Box<D>& b, std::mt19937_64& rng, double dv, double drho) {
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  ParticleSet<D>& p = b.sys.particles;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    for (int a = 0; a < D; ++a) {
+      p.position[D * i + a] = b.sys.domain.wrap(a, p.position[D * i + a] + 0.3 * b.dx * u(rng));
+      p.velocity[D * i + a] = dv * u(rng);
+    }
+    p.density[i] = kRho0 * (1 + drho * u(rng));
+    p.mass[i] *= 1 + 0.1 * u(rng);
+  }
+}
+
+template <int D>
+Vec<D> unit(int a) {
+  Vec<D> e = Vec<D>::Zero();
+  e[a] = 1.0;
+  return e;
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// Artificial viscosity
+
+TEST_CASE("artificial viscosity: one pair, approaching and separating, against eqs. (31)-(35)") {
+  const double dx = 0.01, alpha = 0.7, beta = 1.9;
+  for (double r_over_dx : {0.4, 1.0, 1.7}) {
+    for (double sign : {-1.0, 1.0}) {  // -1: approaching
+      CAPTURE(r_over_dx);
+      CAPTURE(sign);
+      Box<2> b("[effects.artificial_viscosity]\nalpha = 0.7\nbeta = 1.9\n", dx, 1.5, KernelType::cubic, 1.0, false);
+      const double r = r_over_dx * dx, u = 0.3, rho1 = 1003.0, rho2 = 996.0;
+      // particle 1 at the origin moving along +x (towards particle 2 when sign = -1 ...)
+      b.add(Vec<2>(0.0, 0.0), Vec<2>(-sign * u, 0.1), rho1, b.mass());
+      b.add(Vec<2>(r, 0.0), Vec<2>(sign * u, 0.1), rho2, 1.3 * b.mass());
+      b.finish();
+      b.evaluate();
+      if (sign > 0) {  // separating: v12 . x12 = (-2u)(-r) > 0 -> Pi = 0, eq. (32)
+        CHECK(b.dvdt(0).norm() == 0.0);
+        CHECK(b.dvdt(1).norm() == 0.0);
+        continue;
+      }
+      // by hand: x12 = (-r, 0), v12 = (2u, 0)
+      const double h = b.sys.kernel.h, vx = 2 * u * (-r);
+      const double phi = h * vx / (r * r + 0.01 * h * h);
+      const double Pi = (-alpha * kSound * phi + beta * phi * phi) / (0.5 * (rho1 + rho2));
+      const double F = b.sys.kernel.dWdr(r) / r;
+      const double expect1 = -1.3 * b.mass() * Pi * F * (-r);  // dv_1x = -m_2 Pi F x12
+      CHECK(Pi > 0);
+      CHECK(b.dvdt(0)[0] == doctest::Approx(expect1).epsilon(1e-12));
+      CHECK(b.dvdt(0)[0] < 0);  // pushed away from particle 2 (which is at +x)
+      CHECK(b.dvdt(0)[1] == 0.0);
+      CHECK(b.mass() * b.dvdt(0)[0] + 1.3 * b.mass() * b.dvdt(1)[0] == doctest::Approx(0.0).scale(std::abs(expect1) * b.mass()));
+    }
+  }
+}
+
+TEST_CASE("artificial viscosity: zero for a uniform velocity and for an expanding block") {
+  const double dx = 0.01;
+  {
+    Box<2> b("[effects.artificial_viscosity]\n", dx, 1.6, KernelType::quintic, 24 * dx, true);
+    b.lattice(24, [](const Vec<2>&) { return Vec<2>(0.4, -0.25); });
+    std::mt19937_64 rng(3);
+    disorder(b, rng, 0.0, 0.03);
+    for (std::size_t i = 0; i < b.sys.particles.size(); ++i) b.sys.particles.v(i) = Vec<2>(0.4, -0.25);
+    b.finish();
+    b.evaluate();
+    double worst = 0;
+    for (std::size_t i = 0; i < b.n(); ++i) worst = std::max(worst, b.dvdt(i).norm());
+    CHECK(worst == 0.0);
+  }
+  {  // v = gamma x: every pair separates (v_ij . x_ij = gamma r^2 > 0)
+    Box<2> b("[effects.artificial_viscosity]\n", dx, 1.6, KernelType::quintic, 1.0, false);
+    b.lattice(20, [](const Vec<2>& x) { return Vec<2>(2.0 * x); });
+    b.finish();
+    b.evaluate();
+    double worst = 0;
+    for (std::size_t i = 0; i < b.n(); ++i) worst = std::max(worst, b.dvdt(i).norm());
+    CHECK(worst == 0.0);
+    // and a converging block (v = -gamma x, every pair approaching with the same Pi(r)) is
+    // decelerated: inside, the pair forces cancel by symmetry; the particles within 3 dx of
+    // the block's edge are all pushed outwards.
+    for (std::size_t i = 0; i < b.sys.particles.size(); ++i) b.sys.particles.v(i) *= -1.0;
+    b.evaluate();
+    int outward = 0, total = 0;
+    const Vec<2> centre = Vec<2>::Constant(10 * dx);
+    for (std::size_t i = 0; i < b.n(); ++i) {
+      const Vec<2> rel = Vec<2>(b.sys.particles.x(i)) - centre;
+      if (rel.cwiseAbs().maxCoeff() < 7 * dx) continue;
+      ++total;
+      outward += b.dvdt(i).dot(rel) > 0;
+    }
+    CHECK(total == 400 - 14 * 14);
+    CHECK(outward == total);
+  }
+}
+
+namespace {
+
+// Disordered periodic set with random velocities: sum_i m_i dv_i/dt = 0 to rounding, and the
+// kinetic energy decreases, dE/dt = sum_i m_i v_i . dv_i/dt = -sum_pairs m_i m_j Pi_ij F_ij v_ij . x_ij < 0.
+template <int D>
+void avConservation(Box<D>& b, std::mt19937_64& rng) {
+  disorder(b, rng, 0.5, 0.05);
+  b.finish();
+  b.evaluate();
+  const ParticleSet<D>& p = b.sys.particles;
+  Vec<D> P = Vec<D>::Zero();
+  double P_abs = 0, dE = 0, dE_abs = 0;
+  for (std::size_t i = 0; i < b.n(); ++i) {
+    P += p.mass[i] * b.dvdt(i);
+    P_abs += p.mass[i] * b.dvdt(i).norm();
+    dE += p.mass[i] * p.v(i).dot(b.dvdt(i));
+    dE_abs += p.mass[i] * std::abs(p.v(i).dot(b.dvdt(i)));
+  }
+  MESSAGE(D, "D: |sum m dv/dt| / sum m |dv/dt| = ", P.norm() / P_abs, ", dE/dt / sum |m v.dv/dt| = ", dE / dE_abs);
+  CHECK(P_abs > 0);
+  CHECK(P.norm() < 1e-13 * P_abs);
+  CHECK(dE < 0);
+}
+
+}  // namespace
+
+TEST_CASE("artificial viscosity: conserves momentum and dissipates kinetic energy on a disordered periodic set") {
+  std::mt19937_64 rng(11);
+  {
+    Box<2> b("[effects.artificial_viscosity]\n", 0.01, 1.5, KernelType::quintic, 24 * 0.01, true);
+    b.lattice(24, [](const Vec<2>&) { return Vec<2>::Zero(); });
+    avConservation(b, rng);
+  }
+  {
+    Box<3> b("[effects.artificial_viscosity]\nalpha = 0.5\nbeta = 0\n", 0.01, 1.3, KernelType::wendland_c2, 10 * 0.01, true);
+    b.lattice(10, [](const Vec<3>&) { return Vec<3>::Zero(); });
+    avConservation(b, rng);
+  }
+}
+
+TEST_CASE("artificial viscosity: needs a sound speed; keys are checked") {
+  Config cfg = Config::fromString("[effects.artificial_viscosity]\nalpha = 1\n", "test");
+  ConfigTable root = cfg.root();
+  ConfigTable eff = root.table("effects");
+  SphSystem<2> sys;
+  sys.kernel = Kernel(KernelType::quintic, 2, 0.016);
+  sys.domain.hi = Vec<2>::Constant(1.0);
+  sys.particles.add(Vec<2>::Constant(0.5), Vec<2>::Zero(), kRho0, 0.1, ParticleKind::fluid, 0);
+  sys.particles.n_moving = 1;
+  sys.effects = makeEffects<2>(eff);
+  CHECK_THROWS_WITH_AS(sys.setup(0.01, kRho0, 0.0, 0.001), doctest::Contains("add [effects.equation_of_state]"), InputError);
+  Config bad = Config::fromString("[effects.artificial_viscosity]\nbeta = -1\n", "test");
+  ConfigTable broot = bad.root();
+  ConfigTable beff = broot.table("effects");
+  CHECK_THROWS_WITH_AS(makeEffects<2>(beff), doctest::Contains("non-negative"), InputError);
+}
+
+// ---------------------------------------------------------------------------------------------
+// XSPH
+
+TEST_CASE("xsph: a uniform velocity is unchanged; one moving particle drifts towards its neighbours") {
+  const double dx = 0.01, eps = 0.5;
+  for (const std::string form : {"monaghan", "normalised"}) {
+    CAPTURE(form);
+    const std::string keys = "[effects.xsph]\nform = \"" + form + "\"\n";
+    {
+      Box<2> b(keys, dx, 1.6, KernelType::quintic, 20 * dx, true);
+      b.lattice(20, [](const Vec<2>&) { return Vec<2>(0.3, -0.2); });
+      std::mt19937_64 rng(5);
+      disorder(b, rng, 0.0, 0.05);
+      for (std::size_t i = 0; i < b.sys.particles.size(); ++i) b.sys.particles.v(i) = Vec<2>(0.3, -0.2);
+      b.finish();
+      b.evaluate();
+      double worst = 0;
+      for (std::size_t i = 0; i < b.n(); ++i) worst = std::max(worst, (b.dxdt(i) - Vec<2>(0.3, -0.2)).norm());
+      CHECK(worst == 0.0);
+    }
+    // Regular periodic lattice at rest but for particle k moving with u: by hand,
+    //   monaghan:   dx_k/dt = u (1 - eps V S),  dx_j/dt = eps V W(|x_j - x_k|) u   (V = m/rho = dx^2)
+    //   normalised: dx_k/dt = u (1 - eps S/(W(0) + S)),  dx_j/dt = eps W_jk u / (W(0) + S)
+    // with S = sum over lattice offsets d != 0 of W(|d|), from Kernel::W.
+    Box<2> b(keys, dx, 1.6, KernelType::quintic, 20 * dx, true);
+    b.lattice(20, [](const Vec<2>&) { return Vec<2>::Zero(); });
+    const std::size_t k = 10 * 20 + 10;
+    const Vec<2> u(0.2, 0.05);
+    b.sys.particles.v(k) = u;
+    b.finish();
+    b.evaluate();
+    const Kernel& K = b.sys.kernel;
+    double S = 0;
+    for (int i = -6; i <= 6; ++i)
+      for (int j = -6; j <= 6; ++j)
+        if (i || j) S += K.W(dx * std::hypot(i, j));
+    const double V = dx * dx, W0 = K.W(0.0);
+    const bool norm = form == "normalised";
+    const Vec<2> expect_k = norm ? Vec<2>(u * (1 - eps * S / (W0 + S))) : Vec<2>(u * (1 - eps * V * S));
+    MESSAGE(form, ": dx_k/dt = ", b.dxdt(k).transpose(), " (v = ", u.transpose(), "), V S = ", V * S);
+    CHECK((b.dxdt(k) - expect_k).norm() < 1e-12 * u.norm());
+    CHECK(b.dxdt(k).norm() < u.norm());  // pulled towards the neighbours' mean (zero)
+    const std::size_t j = k + 1;          // the neighbour at +dx
+    const Vec<2> expect_j = norm ? Vec<2>(eps * K.W(dx) / (W0 + S) * u) : Vec<2>(eps * V * K.W(dx) * u);
+    CHECK((b.dxdt(j) - expect_j).norm() < 1e-12 * u.norm());
+    CHECK(b.dvdt(k).norm() == 0.0);  // positions only
+  }
+}
+
+TEST_CASE("xsph: the monaghan form conserves momentum, sum m_i (dx_i/dt - v_i) = 0") {
+  std::mt19937_64 rng(17);
+  double ratio[2];
+  for (int f = 0; f < 2; ++f) {
+    Box<2> b(f == 0 ? "[effects.xsph]\nepsilon = 0.8\n" : "[effects.xsph]\nepsilon = 0.8\nform = \"normalised\"\n", 0.01,
+             1.5, KernelType::quintic, 24 * 0.01, true);
+    b.lattice(24, [](const Vec<2>&) { return Vec<2>::Zero(); });
+    disorder(b, rng, 1.0, 0.05);  // random masses and densities too
+    b.finish();
+    b.evaluate();
+    const ParticleSet<2>& p = b.sys.particles;
+    Vec<2> P = Vec<2>::Zero();
+    double P_abs = 0;
+    for (std::size_t i = 0; i < b.n(); ++i) {
+      const Vec<2> d = b.dxdt(i) - p.v(i);
+      P += p.mass[i] * d;
+      P_abs += p.mass[i] * d.norm();
+    }
+    CHECK(P_abs > 0);
+    ratio[f] = P.norm() / P_abs;
+  }
+  MESSAGE("|sum m (dx/dt - v)| / sum m |dx/dt - v|: monaghan ", ratio[0], ", normalised ", ratio[1]);
+  CHECK(ratio[0] < 1e-13);
+  CHECK(ratio[1] > 1e-6);  // the thesis' Shepard form is not symmetric: the two forms differ
+}
+
+TEST_CASE("xsph: wall particles are not averaged in; the leapfrog moves particles with dx/dt") {
+  {  // the channel with walls, the fluid moving uniformly: XSPH changes nothing
+    SceneHeader h;
+    Config cfg = loadScene(VESPH_SOURCE_DIR "/cases/poiseuille_newtonian.toml",
+                           {"effects.xsph.epsilon=0.5", "initial.velocity=[1e-5, 0.0]"}, h);
+    Simulation<2> sim(cfg, h);
+    std::vector<double> y = sim.state(), ydot(y.size());
+    sim.system().evaluate(0.0, y.data(), ydot.data());
+    const std::size_t n = sim.system().particles.n_moving;
+    double worst = 0;
+    for (std::size_t k = 0; k < n * 2; ++k) worst = std::max(worst, std::abs(ydot[k] - y[n * 3 + k]));
+    CHECK(y[n * 3] == 1e-5);
+    CHECK(worst == 0.0);
+  }
+  // One leapfrog step: the position must follow dx/dt (with the XSPH part) over the whole step,
+  // not only over the predictor's half (to O(dt^2)).
+  const double dx = 0.01;
+  Box<2> b("[effects.xsph]\n", dx, 1.6, KernelType::quintic, 20 * dx, true);
+  b.lattice(20, [](const Vec<2>&) { return Vec<2>::Zero(); });
+  const std::size_t k = 10 * 20 + 10;
+  b.sys.particles.v(k) = Vec<2>(0.2, 0.0);
+  b.finish();
+  b.evaluate();
+  const std::vector<double> rate = b.ydot, y0 = b.y;
+  for (const char* type : {"leapfrog", "midpoint"}) {
+    CAPTURE(type);
+    const double dt = 1e-6;
+    Config icfg = Config::fromString(std::string("type = \"") + type + "\"\nstep = 1e-6\n", "test");
+    ConfigTable t = icfg.root();
+    auto integ = makeIntegrator(t, ReferenceScales{dx, kRho0, 0.01, 0.2});
+    std::vector<double> y = y0;
+    integ->start(b.sys, 0.0, y.data());
+    REQUIRE(integ->advance(dt));
+    for (std::size_t i : {k, k + 1, k + 20}) {
+      const Vec<2> moved = (Eigen::Map<const Vec<2>>(y.data() + 2 * i) - Eigen::Map<const Vec<2>>(y0.data() + 2 * i)) / dt;
+      const Vec<2> rate_i = Eigen::Map<const Vec<2>>(rate.data() + 2 * i);
+      CHECK((moved - rate_i).norm() < 1e-4 * 0.2);
+    }
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Artificial stress
+
+TEST_CASE("artificial stress: zero under compression, -eps sigma'/rho^2 along tensile principal axes") {
+  const double eps = 0.3, rho = 990.0, s = -eps / (rho * rho);
+  // pure pressure p > 0 (compression) and any compressive state: R = 0
+  for (double p : {1.0, 1e5})
+    CHECK(artificialStress<2>(-p * Mat<2>::Identity(), rho, eps).norm() == 0.0);
+  CHECK(artificialStress<3>(-7.0 * Mat<3>::Identity(), rho, eps).norm() == 0.0);
+  Mat<3> comp;  // all eigenvalues negative (-10 -+ 6 sqrt 2, -10) but not diagonally dominant
+  comp << -10, 6, 6, 6, -10, 0, 6, 0, -10;
+  CHECK(artificialStress<3>(comp, rho, eps).norm() == 0.0);
+  Mat<2> comp2;  // eigenvalues -1 and -9
+  comp2 << -5, 4, 4, -5;
+  CHECK(artificialStress<2>(comp2, rho, eps).norm() == 0.0);
+  // negative pressure (isotropic tension): R = eps p / rho^2 I, i.e. -eps |p| / rho^2 I
+  const double p = -250.0;
+  CHECK((artificialStress<2>(-p * Mat<2>::Identity(), rho, eps) - s * (-p) * Mat<2>::Identity()).norm() < 1e-15 * std::abs(s * p));
+  CHECK((artificialStress<3>(-p * Mat<3>::Identity(), rho, eps) - s * (-p) * Mat<3>::Identity()).norm() < 1e-15 * std::abs(s * p));
+  // uniaxial tension along x with compression along y: R only along x
+  Mat<2> uni;
+  uni << 40.0, 0.0, 0.0, -90.0;
+  const Mat<2> R = artificialStress<2>(uni, rho, eps);
+  CHECK(R(0, 0) == doctest::Approx(s * 40.0).epsilon(1e-14));
+  CHECK(R(0, 0) < 0);
+  CHECK(std::abs(R(0, 1)) < 1e-15 * std::abs(s * 40.0));
+  CHECK(std::abs(R(1, 1)) < 1e-15 * std::abs(s * 40.0));
+}
+
+TEST_CASE("artificial stress: rotation to the principal axes and back (eqs. 40-44) against a rotated diagonal state") {
+  const double eps = 0.5, rho = 1010.0, s = -eps / (rho * rho);
+  // 2D: sigma = Q(phi) diag(a, b) Q^T built here; R must be Q diag(R'(a), R'(b)) Q^T for every
+  // angle, including the degenerate directions of Fang's eq. (41) (sigma_xx = sigma_yy at 45 deg).
+  for (double a_b : {0.0, 1.0}) {
+    const double a = 35.0, b = a_b == 0.0 ? -20.0 : 12.0;
+    for (int k = 0; k <= 24; ++k) {
+      const double phi = -M_PI + k * M_PI / 12.0 + (k % 5 == 0 ? 0.0 : 0.013);
+      CAPTURE(phi);
+      CAPTURE(b);
+      const Mat<2> Q = Eigen::Rotation2Dd(phi).toRotationMatrix();
+      const Mat<2> sigma = Q * Vec<2>(a, b).asDiagonal() * Q.transpose();
+      const Vec<2> rp(s * a, b > 0 ? s * b : 0.0);
+      const Mat<2> expect = Q * rp.asDiagonal() * Q.transpose();
+      const Mat<2> R = artificialStress<2>(sigma, rho, eps);
+      CHECK((R - expect).norm() < 1e-13 * expect.norm());
+      CHECK(std::abs(R(0, 1) - R(1, 0)) == 0.0);
+    }
+  }
+  // 3D: random rotations of diag(a, b, c) with mixed signs
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int k = 0; k < 50; ++k) {
+    const Vec<3> axis = Vec<3>(u(rng), u(rng), u(rng)).normalized();
+    const Mat<3> Q = Eigen::AngleAxisd(M_PI * u(rng), axis).toRotationMatrix();
+    const Vec<3> lam(50 * u(rng), 50 * u(rng), 50 * u(rng));
+    const Mat<3> sigma = Q * lam.asDiagonal() * Q.transpose();
+    Vec<3> rp;
+    for (int a = 0; a < 3; ++a) rp[a] = lam[a] > 0 ? s * lam[a] : 0.0;
+    const Mat<3> expect = Q * rp.asDiagonal() * Q.transpose();
+    const Mat<3> R = artificialStress<3>(sigma, rho, eps);
+    CHECK((R - expect).norm() < 1e-12 * std::max(expect.norm(), std::abs(s) * 50));
+  }
+  // 2D planar state embedded in 3D gives the same R
+  Mat<2> s2;
+  s2 << 12.0, -30.0, -30.0, 4.0;
+  Mat<3> s3 = Mat<3>::Zero();
+  s3.topLeftCorner<2, 2>() = s2;
+  s3(2, 2) = -1.0;
+  CHECK((artificialStress<3>(s3, rho, eps).topLeftCorner<2, 2>() - artificialStress<2>(s2, rho, eps)).norm() <
+        1e-13 * artificialStress<2>(s2, rho, eps).norm());
+}
+
+TEST_CASE("artificial stress: one pair in tension, f_ij = W(r)/W(dx) of eq. (39), zero under compression") {
+  const double dx = 0.01, eps = 0.25;
+  const Kernel K(KernelType::cubic, 2, 1.5 * dx);
+  // Fang: for the cubic spline with h = 1.5 dx, W(0)/W(dx) = 1.8
+  CHECK(K.W(0.0) / K.W(dx) == doctest::Approx(1.8).epsilon(1e-12));
+  for (double r_over_dx : {1.0, 0.5, 1.6}) {
+    for (double rho : {998.0, 1002.0}) {  // p = c^2 (rho - rho0): tension, compression
+      CAPTURE(r_over_dx);
+      CAPTURE(rho);
+      Box<2> b("[effects.artificial_stress]\nepsilon = 0.25\n", dx, 1.5, KernelType::cubic, 1.0, false);
+      const double r = r_over_dx * dx;
+      b.add(Vec<2>(0.0, 0.0), Vec<2>::Zero(), rho, b.mass());
+      b.add(Vec<2>(0.0, r), Vec<2>::Zero(), rho, b.mass());
+      b.finish();
+      b.evaluate();
+      const double p = kSound * kSound * (rho - kRho0);
+      if (p > 0) {
+        CHECK(b.dvdt(0).norm() == 0.0);
+        CHECK(b.dvdt(1).norm() == 0.0);
+        continue;
+      }
+      const double R = -eps * (-p) / (rho * rho);  // sigma = -p I > 0: R = -eps sigma/rho^2 I
+      const double f = K.W(r) / K.W(dx);
+      if (r_over_dx == 1.0) CHECK(f == doctest::Approx(1.0).epsilon(1e-14));
+      const double expect = b.mass() * std::pow(f, 4) * (K.dWdr(r) / r) * 2 * R * (-r);  // y component, x_12 = (0, -r)
+      CHECK(b.dvdt(0)[1] == doctest::Approx(expect).epsilon(1e-12));
+      CHECK(b.dvdt(0)[1] < 0);  // repulsive: particle 0 pushed away from particle 1 (above it)
+      CHECK(b.dvdt(0)[0] == 0.0);
+      CHECK(b.dvdt(1)[1] == doctest::Approx(-expect).epsilon(1e-12));
+    }
+  }
+}
+
+namespace {
+
+// Disordered periodic set, p = c^2 (rho - rho0) of both signs, a random elastic stress S (a
+// field no effect evolves, set by hand): the field artificial_stress holds R(-p I + S) for
+// every particle, and sum_i m_i dv_i/dt = 0 to rounding.
+template <int D>
+void asConservation(Box<D>& b, std::mt19937_64& rng) {
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  disorder(b, rng, 0.1, 0.002);  // p in [-200, 200] Pa
+  Field& S = b.sys.particles.fields.require("elastic_stress", symmetricComponents<D>());
+  b.finish();
+  for (double& s : S.data) s = 150.0 * u(rng);
+  b.evaluate();
+  const ParticleSet<D>& p = b.sys.particles;
+  const Field* R = p.fields.find("artificial_stress");
+  REQUIRE(R);
+  const Field* pres = p.fields.find("pressure");
+  int tensile = 0, zero = 0, wrong = 0;
+  for (std::size_t i = 0; i < b.n(); ++i) {
+    const Mat<D> sigma = -pres->data[i] * Mat<D>::Identity() + unpackSymmetric<D>(S.at(i));
+    const Mat<D> expect = artificialStress<D>(sigma, p.density[i], 0.4);
+    wrong += (unpackSymmetric<D>(R->at(i)) - expect).norm() > 1e-15 * (1 + expect.norm());
+    const Eigen::SelfAdjointEigenSolver<Mat<D>> es(sigma);
+    const bool tension = es.eigenvalues().maxCoeff() > 0;
+    (tension ? tensile : zero) += 1;
+    if (!tension) CHECK(expect.norm() == 0.0);
+    if (tension) CHECK(expect.norm() > 0.0);
+  }
+  CHECK(wrong == 0);
+  CHECK(tensile > 50);
+  CHECK(zero > 10);
+  Vec<D> P = Vec<D>::Zero();
+  double P_abs = 0;
+  for (std::size_t i = 0; i < b.n(); ++i) {
+    P += p.mass[i] * b.dvdt(i);
+    P_abs += p.mass[i] * b.dvdt(i).norm();
+  }
+  MESSAGE(D, "D artificial stress: ", tensile, " particles in tension, ", zero, " not; |sum m dv/dt| / sum m |dv/dt| = ",
+          P.norm() / P_abs);
+  CHECK(P_abs > 0);
+  CHECK(P.norm() < 1e-13 * P_abs);
+}
+
+}  // namespace
+
+TEST_CASE("artificial stress: momentum conservation and R = R(-p I + S) on a disordered set with an elastic stress") {
+  std::mt19937_64 rng(23);
+  {
+    Box<2> b("[effects.artificial_stress]\nepsilon = 0.4\nexponent = 3\n", 0.01, 1.5, KernelType::quintic, 24 * 0.01, true);
+    b.lattice(24, [](const Vec<2>&) { return Vec<2>::Zero(); });
+    asConservation(b, rng);
+  }
+  {
+    Box<3> b("[effects.artificial_stress]\nepsilon = 0.4\nexponent = 3\n", 0.01, 1.3, KernelType::wendland_c2, 10 * 0.01, true);
+    b.lattice(10, [](const Vec<3>&) { return Vec<3>::Zero(); });
+    asConservation(b, rng);
+  }
+}
+
+TEST_CASE("artificial stress: wall particles carry R from their own pressure; bad keys are refused") {
+  SceneHeader h;
+  // p0 < 0 puts the whole channel in tension.
+  Config cfg = loadScene(VESPH_SOURCE_DIR "/cases/poiseuille_newtonian.toml",
+                         {"effects.artificial_stress.epsilon=0.3", "effects.equation_of_state.reference_pressure=-1e-4"}, h);
+  Simulation<2> sim(cfg, h);
+  std::vector<double> y = sim.state(), ydot(y.size());
+  SphSystem<2>& sys = sim.system();
+  sys.evaluate(0.0, y.data(), ydot.data());
+  const ParticleSet<2>& p = sys.particles;
+  const Field* R = p.fields.find("artificial_stress");
+  const Field* pres = p.fields.find("pressure");
+  REQUIRE(R);
+  REQUIRE(R->range == Field::Range::all);
+  int nonzero = 0;
+  for (std::size_t w = p.n_moving; w < p.size(); ++w) {
+    const Mat<2> expect = artificialStress<2>(-pres->data[w] * Mat<2>::Identity(), p.density[w], 0.3);
+    CHECK((unpackSymmetric<2>(R->at(w)) - expect).norm() <= 1e-15 * (1 + expect.norm()));
+    nonzero += expect.norm() > 0;
+  }
+  CHECK(nonzero == static_cast<int>(p.nFixed()));
+
+  auto refuses = [](const std::string& set, const std::string& needle) {
+    SceneHeader hh;
+    try {
+      Config c = loadScene(VESPH_SOURCE_DIR "/cases/poiseuille_newtonian.toml", {set}, hh);
+      Simulation<2> s(c, hh);
+    } catch (const InputError& e) {
+      INFO(e.what());
+      CHECK(std::string(e.what()).find(needle) != std::string::npos);
+      return;
+    }
+    FAIL("no InputError for " << set);
+  };
+  refuses("effects.artificial_stress.epsilon=1.5", "effects.artificial_stress.epsilon");
+  refuses("effects.artificial_stress.exponent=0", "effects.artificial_stress.exponent");
+  refuses("effects.artificial_stress.exponent=2.5", "effects.artificial_stress.exponent");
+}
+
+// ---------------------------------------------------------------------------------------------
+// The prepare hook
+
+namespace {
+
+// A pair effect that records which particles prepare() visited and whether every pair term saw
+// its neighbour's prepared value.
+template <int D>
+class Probe final : public PairEffect<D, Probe<D>> {
+ public:
+  explicit Probe(bool prepares) : prepares_(prepares) {}
+  std::string_view name() const override { return "probe"; }
+  Phase phase() const override { return Phase::forces; }
+  bool prepares() const override { return prepares_; }
+  void setup(Setup<D>& s) override { value_ = &s.particles.fields.require("probe", 1); }
+  void prepare(const RhsContext<D>& ctx, std::size_t begin, std::size_t end) const override {
+    for (std::size_t k = begin; k < end; ++k) {
+      calls[k] += 1;
+      value_->data[k] = 2.0 * k + 1.0;
+    }
+  }
+  struct Local {
+    bool ok;
+  };
+  Local begin(const RhsContext<D>&, Index) const { return {true}; }
+  void pair(const RhsContext<D>&, Index, const Neighbour<D>& nb, Local& l) const {
+    l.ok = l.ok && value_->data[nb.j] == 2.0 * nb.j + 1.0;
+  }
+  void end(const RhsContext<D>&, Index i, Local& l) const { seen[i] = l.ok ? 1 : 2; }
+
+  mutable std::vector<int> calls, seen;
+
+ private:
+  bool prepares_;
+  Field* value_ = nullptr;
+};
+
+}  // namespace
+
+TEST_CASE("pair driver: prepare() covers every particle, moving and fixed, once per pass, before the pair terms") {
+  for (bool prepares : {true, false}) {
+    CAPTURE(prepares);
+    // 72 x 72 lattice (5184 particles, above the parallel threshold), the outer 4 layers fixed.
+    const double dx = 0.01;
+    Box<2> b("", dx, 1.3, KernelType::wendland_c2, 1.0, false);
+    const int n = 72, frame = 4;
+    for (int pass = 0; pass < 2; ++pass)
+      for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j) {
+          const bool fixed = i < frame || j < frame || i >= n - frame || j >= n - frame;
+          if (fixed != (pass == 1)) continue;
+          b.add(Vec<2>((i + 0.5) * dx, (j + 0.5) * dx), Vec<2>::Zero(), kRho0, b.mass(), fixed);
+        }
+    auto probe = std::make_unique<Probe<2>>(prepares);
+    Probe<2>* pr = probe.get();
+    pr->calls.assign(b.sys.particles.size(), 0);
+    pr->seen.assign(b.sys.particles.n_moving, 0);
+    std::vector<std::unique_ptr<Effect<2>>> extra;
+    extra.push_back(std::move(probe));
+    b.finish(std::move(extra));
+    b.evaluate();
+    int once = 0, ok = 0;
+    for (int c : pr->calls) once += c == 1;
+    for (int s : pr->seen) ok += s == 1;
+    if (prepares) {
+      CHECK(once == static_cast<int>(b.sys.particles.size()));
+      CHECK(ok == static_cast<int>(b.n()));
+    } else {
+      CHECK(once == 0);
+      CHECK(ok == 0);  // never prepared: the neighbours' values are not there
+    }
+    b.evaluate();
+    int twice = 0;
+    for (int c : pr->calls) twice += c == 2;
+    CHECK(twice == (prepares ? static_cast<int>(b.sys.particles.size()) : 0));
+  }
+}
