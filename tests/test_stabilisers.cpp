@@ -640,3 +640,216 @@ TEST_CASE("pair driver: prepare() covers every particle, moving and fixed, once 
     CHECK(twice == (prepares ? static_cast<int>(b.sys.particles.size()) : 0));
   }
 }
+
+// ---------------------------------------------------------------------------------------------
+// Density diffusion (delta-SPH, Molteni & Colagrossi 2009; src/physics/density_diffusion.cpp):
+//   d rho_i/dt += delta h c sum_j 2 (rho_j - rho_i + rho0 g . r_ij / c^2) (-F_ij) m_j/rho_j
+
+namespace {
+
+template <int D>
+double drhodt(const Box<D>& b, std::size_t i) {
+  return b.ydot[b.n() * D + i];
+}
+
+}  // namespace
+
+TEST_CASE("density diffusion: one pair against the formula; zero for a uniform density; a bump is smoothed") {
+  const double dx = 0.01, delta = 0.13;
+  {  // one pair, by hand
+    Box<2> b("[effects.density_diffusion]\ndelta = 0.13\n", dx, 1.5, KernelType::cubic, 1.0, false);
+    const double r = 0.8 * dx, rho1 = 1010.0, rho2 = 990.0, m1 = b.mass(), m2 = 1.3 * b.mass();
+    b.add(Vec<2>(0.0, 0.0), Vec<2>(0.1, 0.0), rho1, m1);
+    b.add(Vec<2>(0.6 * r, 0.8 * r), Vec<2>(0.0, -0.2), rho2, m2);
+    b.finish();
+    b.evaluate();
+    const double h = b.sys.kernel.h, F = b.sys.kernel.dWdr(r) / r;
+    const double expect1 = delta * h * kSound * 2 * (rho2 - rho1) * (-F) * m2 / rho2;
+    const double expect2 = delta * h * kSound * 2 * (rho1 - rho2) * (-F) * m1 / rho1;
+    CHECK(expect1 < 0);  // the denser particle loses density
+    CHECK(drhodt(b, 0) == doctest::Approx(expect1).epsilon(1e-12));
+    CHECK(drhodt(b, 1) == doctest::Approx(expect2).epsilon(1e-12));
+    // sum_i (m_i/rho_i) d rho_i/dt = 0
+    CHECK(m1 / rho1 * drhodt(b, 0) + m2 / rho2 * drhodt(b, 1) == doctest::Approx(0.0).scale(std::abs(m1 / rho1 * expect1)));
+    CHECK(b.dvdt(0).norm() == 0.0);  // density only
+    CHECK((b.dxdt(0) - Vec<2>(0.1, 0.0)).norm() == 0.0);
+  }
+  // A disordered periodic set of uniform density (random positions and masses): exactly zero.
+  Box<2> b("[effects.density_diffusion]\n", dx, 1.5, KernelType::cubic, 20 * dx, true);
+  b.lattice(20, [](const Vec<2>&) { return Vec<2>::Zero(); });
+  std::mt19937_64 rng(23);
+  disorder(b, rng, 0.3, 0.0);
+  b.finish();
+  b.evaluate();
+  double worst = 0;
+  for (std::size_t i = 0; i < b.n(); ++i) worst = std::max(worst, std::abs(drhodt(b, i)));
+  CHECK(worst == 0.0);
+  // A density bump on one particle k of a regular lattice: d rho_k/dt < 0, its neighbours gain,
+  // d rho_j/dt = 2 delta h c (rho_k - rho0)(-F(|x_k - x_j|)) V_k for a neighbour j.
+  Box<2> c("[effects.density_diffusion]\n", dx, 1.5, KernelType::cubic, 20 * dx, true);
+  c.lattice(20, [](const Vec<2>&) { return Vec<2>::Zero(); });
+  const std::size_t k = 10 * 20 + 10;
+  c.sys.particles.density[k] = 1.02 * kRho0;
+  c.finish();
+  c.evaluate();
+  CHECK(drhodt(c, k) < 0);
+  const double h = c.sys.kernel.h, coeff = 0.1 * h * kSound;
+  for (std::size_t j : {k + 1, k + 21}) {
+    const double r = (Vec<2>(c.sys.particles.x(j)) - Vec<2>(c.sys.particles.x(k))).norm();
+    const double expect = coeff * 2 * 0.02 * kRho0 * (-c.sys.kernel.dWdr(r) / r) * c.mass() / (1.02 * kRho0);
+    CHECK(drhodt(c, j) > 0);
+    CHECK(drhodt(c, j) == doctest::Approx(expect).epsilon(1e-12));
+  }
+  double total = 0;  // equal masses: sum_i d rho_i/dt / rho_i = 0
+  for (std::size_t i = 0; i < c.n(); ++i) total += drhodt(c, i) / c.sys.particles.density[i];
+  CHECK(std::abs(total) < 1e-13 * std::abs(drhodt(c, k)) / kRho0);
+}
+
+namespace {
+
+// Disordered periodic set with random densities and masses: sum_i V_i d rho_i/dt = 0 to rounding
+// (V_i = m_i/rho_i; the pair weights are symmetric, the differences antisymmetric) and the
+// density variance decays: sum_i V_i rho_i d rho_i/dt = -delta h c sum_pairs 2 (-F) V_i V_j (rho_j - rho_i)^2 < 0.
+template <int D>
+void ddConservation(Box<D>& b, std::mt19937_64& rng) {
+  disorder(b, rng, 0.5, 0.05);
+  b.finish();
+  b.evaluate();
+  const ParticleSet<D>& p = b.sys.particles;
+  double sum = 0, sum_abs = 0, variance_rate = 0;
+  for (std::size_t i = 0; i < b.n(); ++i) {
+    const double V = p.mass[i] / p.density[i];
+    sum += V * drhodt(b, i);
+    sum_abs += V * std::abs(drhodt(b, i));
+    variance_rate += V * (p.density[i] - kRho0) * drhodt(b, i);
+  }
+  MESSAGE(D, "D: |sum V drho/dt| / sum V |drho/dt| = ", std::abs(sum) / sum_abs);
+  CHECK(sum_abs > 0);
+  CHECK(std::abs(sum) < 1e-13 * sum_abs);
+  CHECK(variance_rate < 0);
+}
+
+}  // namespace
+
+TEST_CASE("density diffusion: conserves sum_i m_i/rho_i drho_i/dt = 0 and smooths a random density field") {
+  std::mt19937_64 rng(29);
+  {
+    Box<2> b("[effects.density_diffusion]\n", 0.01, 1.5, KernelType::cubic, 24 * 0.01, true);
+    b.lattice(24, [](const Vec<2>&) { return Vec<2>::Zero(); });
+    ddConservation(b, rng);
+  }
+  {
+    Box<3> b("[effects.density_diffusion]\ndelta = 0.2\n", 0.01, 1.3, KernelType::wendland_c2, 10 * 0.01, true);
+    b.lattice(10, [](const Vec<3>&) { return Vec<3>::Zero(); });
+    ddConservation(b, rng);
+  }
+}
+
+TEST_CASE("density diffusion: linear field zero in the interior, hydrostatic field zero everywhere, quadratic field ~ delta h c lap(rho)") {
+  const double dx = 0.01, g = 9.81;
+  const int n = 20;
+  const double margin = 2.0 * 1.5 * dx;  // cubic support 2h, h = 1.5 dx
+  auto interior = [&](const Vec<2>& x) {
+    return x.minCoeff() > margin && x.maxCoeff() < n * dx - margin;
+  };
+  // The hydrostatic density of gravity -g e_y with c = kSound: rho = rho0 (1 - g y / c^2).
+  auto hydrostatic = [&](const Vec<2>& x) { return kRho0 * (1.0 - g * x[1] / (kSound * kSound)); };
+  for (bool correction : {false, true}) {
+    CAPTURE(correction);
+    Box<2> b(std::string("[effects.density_diffusion]\nhydrostatic = ") + (correction ? "true" : "false") +
+                 "\n[effects.body_force]\nacceleration = [0.0, -9.81]\n",
+             dx, 1.5, KernelType::cubic, 1.0, false);
+    b.lattice(n, [](const Vec<2>&) { return Vec<2>::Zero(); });
+    // masses rho_i dx^2: uniform volumes, so that the pair sum is linear in the density field
+    for (std::size_t i = 0; i < b.sys.particles.size(); ++i) {
+      b.sys.particles.density[i] = hydrostatic(b.sys.particles.x(i));
+      b.sys.particles.mass[i] = b.sys.particles.density[i] * dx * dx;
+    }
+    b.finish();
+    b.evaluate();
+    // scale: the rate at the top row without the correction, ~ delta h c |grad rho| / h
+    const double scale = 0.1 * kSound * kRho0 * g / (kSound * kSound);
+    double worst_interior = 0, worst = 0;
+    int top_positive = 0, top = 0;
+    for (std::size_t i = 0; i < b.n(); ++i) {
+      const Vec<2> x = b.sys.particles.x(i);
+      const double rate = drhodt(b, i);
+      worst = std::max(worst, std::abs(rate));
+      if (interior(x)) worst_interior = std::max(worst_interior, std::abs(rate));
+      if (x[1] > (n - 1) * dx) {  // the top row, the lightest particles, neighbours only below
+        ++top;
+        top_positive += rate > 0;
+      }
+    }
+    MESSAGE("hydrostatic correction ", correction, ": max |drho/dt| interior ", worst_interior, ", everywhere ", worst,
+            " (scale ", scale, ")");
+    CHECK(worst_interior < 1e-10 * scale);  // a linear field: the lattice sum cancels in a full support
+    if (correction) {
+      CHECK(worst < 1e-10 * scale);  // rho - rho^H = 0 in every pair
+    } else {
+      CHECK(worst > 0.1 * scale);      // the truncated support at the edges does not cancel
+      CHECK(top_positive == top);      // Antuono et al. 2012: the surface density is pushed away
+    }
+  }
+  // A quadratic field rho = rho0 (1 + a |x - x_c|^2): lap rho = 4 rho0 a in 2D; the term is
+  // delta h c lap(rho) in the interior to the accuracy of the SPH Laplacian on the lattice.
+  // The masses m_i = rho_i dx^2 keep the volumes uniform, so that on the symmetric lattice the
+  // linear part cancels and Brookshaw's sum is 4 rho0 a times the lattice moment
+  // sum_j dx^2 (-F_ij) |r_ij|^2 / 2, which is 1 in the continuum (2 int W dV = 2).
+  Box<2> q("[effects.density_diffusion]\n", dx, 1.5, KernelType::cubic, 1.0, false);
+  q.lattice(n, [](const Vec<2>&) { return Vec<2>::Zero(); });
+  const double a = 5.0;  // 1/m^2: rho varies by a (0.1 m)^2 = 5 %
+  const Vec<2> centre = Vec<2>::Constant(0.5 * n * dx);
+  for (std::size_t i = 0; i < q.sys.particles.size(); ++i) {
+    q.sys.particles.density[i] = kRho0 * (1.0 + a * (Vec<2>(q.sys.particles.x(i)) - centre).squaredNorm());
+    q.sys.particles.mass[i] = q.sys.particles.density[i] * dx * dx;
+  }
+  q.finish();
+  q.evaluate();
+  const double expect = 0.1 * q.sys.kernel.h * kSound * 4.0 * kRho0 * a;
+  double worst_rel = 0;
+  for (std::size_t i = 0; i < q.n(); ++i)
+    if (interior(q.sys.particles.x(i))) worst_rel = std::max(worst_rel, std::abs(drhodt(q, i) / expect - 1.0));
+  MESSAGE("quadratic field: max relative deviation from delta h c lap(rho) in the interior ", worst_rel);
+  CHECK(worst_rel < 0.02);
+}
+
+TEST_CASE("density diffusion: wall neighbours skipped by default, included on request; needs a sound speed; keys checked") {
+  const double dx = 0.01;
+  for (const std::string walls : {"", "walls = \"skip\"\n", "walls = \"include\"\n"}) {
+    CAPTURE(walls);
+    Box<2> b("[effects.density_diffusion]\n" + walls, dx, 1.5, KernelType::cubic, 1.0, false);
+    const double r = 1.1 * dx, rho_w = 1030.0;
+    b.add(Vec<2>(0.0, 0.0), Vec<2>::Zero(), kRho0, b.mass());
+    b.add(Vec<2>(0.0, -r), Vec<2>::Zero(), rho_w, b.mass(), true);
+    b.finish();
+    b.evaluate();
+    if (walls.find("include") == std::string::npos) {
+      CHECK(drhodt(b, 0) == 0.0);
+    } else {
+      const double F = b.sys.kernel.dWdr(r) / r;
+      const double expect = 0.1 * b.sys.kernel.h * kSound * 2 * (rho_w - kRho0) * (-F) * b.mass() / rho_w;
+      CHECK(expect > 0);
+      CHECK(drhodt(b, 0) == doctest::Approx(expect).epsilon(1e-12));
+    }
+  }
+  {  // without an equation of state there is no sound speed
+    Config cfg = Config::fromString("[effects.density_diffusion]\n", "test");
+    ConfigTable root = cfg.root();
+    ConfigTable eff = root.table("effects");
+    SphSystem<2> sys;
+    sys.kernel = Kernel(KernelType::cubic, 2, 0.015);
+    sys.domain.hi = Vec<2>::Constant(1.0);
+    sys.particles.add(Vec<2>::Constant(0.5), Vec<2>::Zero(), kRho0, 0.1, ParticleKind::fluid, 0);
+    sys.particles.n_moving = 1;
+    sys.effects = makeEffects<2>(eff);
+    CHECK_THROWS_WITH_AS(sys.setup(0.01, kRho0, 0.0, 0.001), doctest::Contains("add [effects.equation_of_state]"), InputError);
+  }
+  for (const std::string bad : {"delta = -0.1\n", "walls = \"mirror\"\n", "hydrostatic = 1\n"}) {
+    CAPTURE(bad);
+    Config cfg = Config::fromString("[effects.density_diffusion]\n" + bad, "test");
+    ConfigTable root = cfg.root();
+    ConfigTable eff = root.table("effects");
+    CHECK_THROWS_AS(makeEffects<2>(eff), InputError);
+  }
+}

@@ -1490,6 +1490,82 @@ def make_drop_tests(tmp):
     return T
 
 
+def write_tank(path, p_error=0.0, speed=0.0, body_force=True, flag=True):
+    """A 20 x 20 tank of water (dx = 5 mm, H = 0.1 m) at t = 0 and 0.5 s with p = rho g (y_s - y)
+    (y_s the top row's height, the flagged layer) times (1 + p_error) and one particle moving at
+    speed [m/s]; walls: one row below."""
+    dx, rho, g = 5e-3, 1000.0, 9.81
+    xs = (np.arange(20) + 0.5) * dx
+    X, Y = np.meshgrid(xs, xs)
+    fl = np.column_stack([X.ravel(), Y.ravel()])
+    wall = np.column_stack([xs, np.full(20, -0.5 * dx)])
+    n, nw = len(fl), len(wall)
+    ys = fl[:, 1].max()
+    scene = ('name = "tank"\ndimension = 2\n[fluid]\ndensity = 1000.0\nviscosity = 1.0\n'
+             '[[blocks]]\nkind = "fluid"\nmin = [0.0, 0.0]\nmax = [0.1, 0.1]\n'
+             + ('[effects.body_force]\nacceleration = [0.0, -9.81]\n' if body_force else ''))
+    with h5py.File(path, "w") as f:
+        f.attrs["format"] = "vesph-1"
+        f.attrs["dim"] = np.int64(2)
+        f.attrs["scene"] = scene
+        f.attrs["dx"] = np.float64(dx)
+        for i, t in enumerate((0.0, 0.5)):
+            g_ = f.create_group(f"frames/{i:06d}")
+            g_.attrs["time"] = np.float64(t)
+            g_.attrs["step"] = np.int64(i)
+            g_.create_dataset("position", data=np.vstack([fl, wall]))
+            v = np.zeros((n + nw, 2))
+            v[5, 1] = speed
+            g_.create_dataset("velocity", data=v)
+            g_.create_dataset("kind", data=np.concatenate([np.zeros(n, np.uint8), np.ones(nw, np.uint8)]))
+            p = np.concatenate([rho * g * (ys - fl[:, 1]) * (1 + p_error), np.zeros(nw)])
+            g_.create_dataset("pressure", data=p)
+            if flag:
+                g_.create_dataset("free_surface", data=np.concatenate([(fl[:, 1] == ys).astype(np.uint8), np.zeros(nw, np.uint8)]))
+    return path
+
+
+def make_hydrostatic_tests(tmp):
+    d = os.path.join(tmp, "tank")
+    os.makedirs(d, exist_ok=True)
+    gH = math.sqrt(9.81 * 0.1)
+
+    def exact():
+        rc, out, err = tool("hydrostatic_check.py", write_tank(os.path.join(d, "exact.h5")))
+        expect(rc == 0 and "RESULT: PASS" in out, f"exact hydrostatic tank: exit {rc}", out + err)
+
+    def pressure_off():
+        rc, out, err = tool("hydrostatic_check.py", write_tank(os.path.join(d, "p3.h5"), p_error=0.03))
+        expect(rc == 1 and "RESULT: FAIL" in out, f"3 % pressure error: exit {rc}", out + err)
+        rc, out, err = tool("hydrostatic_check.py", os.path.join(d, "p3.h5"), "--tolerance", "0.05")
+        expect(rc == 0, f"3 % error within --tolerance 0.05: exit {rc}", out + err)
+
+    def moving():
+        path = write_tank(os.path.join(d, "moving.h5"), speed=2e-3 * gH)
+        rc, out, err = tool("hydrostatic_check.py", path)
+        expect(rc == 1 and "FAIL" in out, f"a particle at 2e-3 sqrt(gH): exit {rc}", out + err)
+        rc, out, err = tool("hydrostatic_check.py", path, "--max-speed", "3e-3")
+        expect(rc == 0, f"within --max-speed 3e-3: exit {rc}", out + err)
+
+    def no_flag_uses_block_top():
+        # without free_surface flags y_s is the block top, half a spacing above the top row:
+        # p = rho g (y_top_row - y) is then low by rho g dx/2 = 0.025 rho g H
+        rc, out, err = tool("hydrostatic_check.py", write_tank(os.path.join(d, "noflag.h5"), flag=False))
+        expect(rc == 1 and "2.5" in out, f"no flags: expected a 2.5e-2 error, exit {rc}", out + err)
+
+    def bad_input():
+        rc, out, err = tool("hydrostatic_check.py", write_tank(os.path.join(d, "nog.h5"), body_force=False))
+        expect(rc == 2 and "body_force" in err, f"no body force: exit {rc}", out + err)
+        rc, out, err = tool("hydrostatic_check.py", os.path.join(d, "missing.h5"))
+        expect(rc != 0 and "no such file" in err, f"missing file: exit {rc}", out + err)
+
+    return [("hydrostatic_check: exact tank passes", exact),
+            ("hydrostatic_check: a 3 % pressure error fails unless tolerated", pressure_off),
+            ("hydrostatic_check: a moving particle fails unless tolerated", moving),
+            ("hydrostatic_check: without flags the block top is the surface", no_flag_uses_block_top),
+            ("hydrostatic_check: no body force, missing file", bad_input)]
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--keep", metavar="DIR", help="keep the synthetic outputs in DIR")
@@ -1505,7 +1581,7 @@ def main():
     os.makedirs(tmp, exist_ok=True)
     r = Runner()
     try:
-        for name, fn in make_tests(tmp) + make_xpp_tests(tmp) + make_drop_tests(tmp):
+        for name, fn in make_tests(tmp) + make_xpp_tests(tmp) + make_drop_tests(tmp) + make_hydrostatic_tests(tmp):
             r.run(name, fn)
     finally:
         if not a.keep:

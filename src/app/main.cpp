@@ -16,6 +16,7 @@
 #include "vesph/core/kernel.hpp"
 #include "vesph/io/progress.hpp"
 #include "vesph/physics/registry.hpp"
+#include "vesph/isph/linear_solver.hpp"
 #include "vesph/sim/simulation.hpp"
 
 using namespace vesph;
@@ -116,7 +117,12 @@ int listAll() {
             << "  cubic                cubic spline, thesis eq. (3.3), support 2h\n"
             << "  quintic              quintic spline, thesis eq. (3.4), support 3h\n"
             << "  wendland_c2          Wendland C2, support 2h\n"
-            << "boundaries:\n"
+            << "pressure schemes (solver.scheme):\n"
+            << "  wcsph                weakly compressible: [effects.equation_of_state] gives the pressure\n"
+            << "  isph                 incompressible: projection after every step, pressure Poisson solve (thesis 3.5)\n"
+            << "linear solvers (solver.linear_solver, with scheme = \"isph\"):\n";
+  for (const auto& s : linearSolverRegistry()) std::printf("  %-20s %s\n", s.name.c_str(), s.summary.c_str());
+  std::cout << "boundaries:\n"
             << "  dummy_walls          [[blocks]] of kind \"wall\": fixed particle layers, no-slip (Adami et al. 2012)\n";
   return 0;
 }

@@ -69,7 +69,8 @@ void writeAtomically(const std::string& path, const std::string& text) {
 
 template <int D>
 OutputWriter<D>::OutputWriter(const std::string& dir, const std::string& name, const FileAttributes& attrs)
-    : dir_(dir), name_(name) {
+    : dir_(dir), name_(name), extra_columns_(attrs.extra_columns) {
+  if (extra_columns_.size() > kMaxExtraDiagnostics) throw std::logic_error("too many extra diagnostics columns");
   std::filesystem::create_directories(dir);
   h5_path_ = (std::filesystem::path(dir) / (name + ".h5")).string();
   xdmf_path_ = (std::filesystem::path(dir) / (name + ".xdmf")).string();
@@ -84,7 +85,9 @@ OutputWriter<D>::OutputWriter(const std::string& dir, const std::string& name, c
   attrString(file_, "kernel", attrs.kernel);
   H5Gclose(checkId(H5Gcreate2(file_, "frames", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), "frames"));
   hid_t diag = checkId(H5Gcreate2(file_, "diagnostics", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), "diagnostics");
-  for (const char* col : kDiagColumns) {
+  std::vector<const char*> columns(std::begin(kDiagColumns), std::end(kDiagColumns));
+  for (const std::string& c : extra_columns_) columns.push_back(c.c_str());
+  for (const char* col : columns) {
     hsize_t dims[1] = {0}, maxdims[1] = {H5S_UNLIMITED}, chunk[1] = {4096};
     hid_t space = H5Screate_simple(1, dims, maxdims);
     hid_t plist = H5Pcreate(H5P_DATASET_CREATE);
@@ -108,9 +111,11 @@ void OutputWriter<D>::appendDiagnostics(const std::vector<DiagnosticsRow>& rows)
   if (rows.empty()) return;
   hid_t diag = checkId(H5Gopen2(file_, "diagnostics", H5P_DEFAULT), "diagnostics");
   std::vector<double> col(rows.size());
-  for (std::size_t c = 0; c < std::size(kDiagColumns); ++c) {
-    for (std::size_t r = 0; r < rows.size(); ++r) col[r] = (&rows[r].time)[c];
-    hid_t d = checkId(H5Dopen2(diag, kDiagColumns[c], H5P_DEFAULT), kDiagColumns[c]);
+  const std::size_t base = std::size(kDiagColumns);
+  for (std::size_t c = 0; c < base + extra_columns_.size(); ++c) {
+    for (std::size_t r = 0; r < rows.size(); ++r) col[r] = c < base ? (&rows[r].time)[c] : rows[r].extra[c - base];
+    const char* cname = c < base ? kDiagColumns[c] : extra_columns_[c - base].c_str();
+    hid_t d = checkId(H5Dopen2(diag, cname, H5P_DEFAULT), cname);
     hsize_t newsize[1] = {diag_rows_ + rows.size()};
     check(H5Dset_extent(d, newsize), "extend diagnostics");
     hid_t fspace = H5Dget_space(d);

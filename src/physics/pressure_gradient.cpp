@@ -7,12 +7,21 @@
 //     exact for linear pressure fields up to the lattice quadrature factor of the kernel
 //     (|m - 1| ~ 5e-4 for the quintic kernel at h = 1.6 dx, tests/test_operators.cpp);
 //     not momentum conserving.
+//   renormalised (Randles & Libersky 1996): the difference form with the kernel-gradient
+//     correction M_i^-1, M_i = -sum_j (m_j/rho_j) F_ij r_ij r_ij^T:
+//       dv_i/dt = -(1/rho_i) M_i^-1 sum_j (m_j/rho_j) (p_j - p_i) grad_i W_ij
+//     exact for linear pressure fields on any support (free surfaces, walls); M_i = I where it
+//     is near-singular (smallest eigenvalue below 0.1). The form of the ISPH projection's
+//     correction (include/vesph/isph/projection.hpp), which makes the incremental projection
+//     keep a fluid at rest exactly at rest. Not momentum conserving.
 // Wall particles carry the pressure and density given them by the wall treatment.
 // free_surface_mirror = true (needs [effects.free_surface]): for a particle flagged on the free
 // surface, the zero-pressure condition by mirrored dummy particles, thesis eq. (4.1): with
 // p_i = 0 and a mirror image of every neighbour carrying -p_j,
 //       dv_i/dt = - (2/rho_i) sum_j (m_j/rho_j) p_j grad_i W_ij
 // in place of the form above.
+#include <Eigen/Eigenvalues>
+
 #include "vesph/physics/registry.hpp"
 
 namespace vesph {
@@ -24,7 +33,7 @@ template <int D, bool Mirror>
 class PressureGradientT final : public PairEffect<D, PressureGradientT<D, Mirror>> {
  public:
   explicit PressureGradientT(ConfigTable& cfg)
-      : symmetric_(cfg.choice("form", "symmetric", {"symmetric", "difference"}) == "symmetric") {}
+      : symmetric_(cfg.string("form", "symmetric") == "symmetric") {}
   std::string_view name() const override { return "pressure_gradient"; }
   Phase phase() const override { return Phase::forces; }
   std::string_view form() const override { return symmetric_ ? "symmetric" : "difference"; }
@@ -75,10 +84,60 @@ class PressureGradientT final : public PairEffect<D, PressureGradientT<D, Mirror
   const Field* surface_ = nullptr;
 };
 
+template <int D>
+class RenormalisedPressureGradient final : public PairEffect<D, RenormalisedPressureGradient<D>> {
+ public:
+  explicit RenormalisedPressureGradient(ConfigTable&) {}
+  std::string_view name() const override { return "pressure_gradient"; }
+  Phase phase() const override { return Phase::forces; }
+  std::string_view form() const override { return "renormalised"; }
+
+  void setup(Setup<D>& s) override {
+    pressure_ = s.particles.fields.find("pressure");
+    if (!pressure_)
+      throw InputError("effects.pressure_gradient needs the particle pressure, which nothing in this scene provides: add "
+                       "[effects.equation_of_state] (weakly compressible SPH) or set solver.scheme = \"isph\"");
+  }
+
+  using Mat = Eigen::Matrix<double, D, D>;
+  struct Local {
+    Mat M;
+    Vec<D> raw;
+    double pi;
+    const double* p;
+    const double* rho;
+    const double* m;
+  };
+  Local begin(const RhsContext<D>& ctx, Index i) const {
+    const ParticleSet<D>& ps = ctx.particles;
+    return {Mat::Zero(), Vec<D>::Zero(), pressure_->data[i], pressure_->data.data(), ps.density.data(), ps.mass.data()};
+  }
+  void pair(const RhsContext<D>&, Index, const Neighbour<D>& nb, Local& l) const {
+    const double vf = l.m[nb.j] / l.rho[nb.j] * nb.F;
+    l.M -= vf * nb.rij * nb.rij.transpose();
+    l.raw += (vf * (l.p[nb.j] - l.pi)) * nb.rij;
+  }
+  void end(const RhsContext<D>& ctx, Index i, Local& l) const {
+    Eigen::SelfAdjointEigenSolver<Mat> eig(l.M, Eigen::EigenvaluesOnly);
+    const Vec<D> grad = eig.eigenvalues().minCoeff() > 0.1 ? Vec<D>(l.M.inverse() * l.raw) : l.raw;
+    const double inv_rho = 1.0 / ctx.particles.density[i];
+    for (int a = 0; a < D; ++a) ctx.dvdt[D * i + a] -= grad[a] * inv_rho;
+  }
+
+ private:
+  const Field* pressure_ = nullptr;
+};
+
 }  // namespace
 
 template <int D>
 std::unique_ptr<Effect<D>> makePressureGradient(ConfigTable& cfg) {
+  const std::string form = cfg.choice("form", "symmetric", {"symmetric", "difference", "renormalised"});
+  if (form == "renormalised") {
+    if (cfg.boolean("free_surface_mirror", false))
+      cfg.fail("free_surface_mirror", "false with form = \"renormalised\" (the renormalised gradient is exact at the free surface without mirrors)");
+    return std::make_unique<RenormalisedPressureGradient<D>>(cfg);
+  }
   if (cfg.boolean("free_surface_mirror", false)) return std::make_unique<PressureGradientT<D, true>>(cfg);
   return std::make_unique<PressureGradientT<D, false>>(cfg);
 }

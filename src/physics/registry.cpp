@@ -17,6 +17,7 @@ namespace vesph {
   X(xpp, makeXpp, "single-equation eXtended Pom-Pom, Verbeeten et al. 2001 (backbone_relaxation_time, modulus, arms, ...)") \
   X(artificial_viscosity, makeArtificialViscosity, "Monaghan artificial viscosity, Fang et al. eqs. (30)-(37) (alpha, beta)") \
   X(xsph, makeXsph, "XSPH particle movement, thesis 3.6 (epsilon, form)")                         \
+  X(density_diffusion, makeDensityDiffusion, "delta-SPH density diffusion, Molteni & Colagrossi 2009 (delta, hydrostatic, walls)") \
   X(artificial_stress, makeArtificialStress, "artificial stress against the tensile instability, Fang et al. eqs. (38)-(44) (epsilon, exponent)") \
   X(free_surface, makeFreeSurface, "free-surface particles by number density n_i <= threshold n_ref, thesis §4.2")
 

@@ -10,6 +10,7 @@
 
 #include "vesph/boundary/dummy_walls.hpp"
 #include "vesph/io/progress.hpp"
+#include "vesph/isph/projection.hpp"
 #include "vesph/physics/registry.hpp"
 
 namespace vesph {
@@ -84,6 +85,17 @@ Simulation<D>::Simulation(Config& config, const SceneHeader& header) : config_(c
     effects.fail("continuity", "at least one effect, e.g. [effects.continuity]");
   if (system_.particles.nFixed() > 0) system_.boundaries.push_back(std::make_unique<DummyWalls<D>>());
 
+  // Pressure scheme: weakly compressible (the pressure from an equation of state, an effect)
+  // or incompressible (the projection after every step, src/isph).
+  ConfigTable solver = root.table("solver");
+  scheme_ = solver.choice("scheme", "wcsph", {"wcsph", "isph"});
+  if (scheme_ == "isph") {
+    system_.hooks.push_back(makeProjection<D>(solver));
+  } else {
+    for (const std::string& key : solver.keys())
+      if (key != "scheme") solver.fail(key, "no " + key + " with scheme = \"wcsph\" (the linear-solver keys belong to scheme = \"isph\")");
+  }
+
   // Time, integrator, output, checks.
   ConfigTable time = root.table("time", false);
   t_end_ = time.number("end", std::nullopt, Bound::positive, "s");
@@ -119,7 +131,7 @@ Simulation<D>::Simulation(Config& config, const SceneHeader& header) : config_(c
   }
   for (const auto& e : system_.effects) scales.stress = std::max(scales.stress, e->stressScale(scales.velocity, length));
   ConfigTable integ = root.table("integrator");
-  integrator_ = makeIntegrator(integ, scales);
+  integrator_ = makeIntegrator(integ, scales, scheme_ == "isph" ? 0.175 : 0.125);
   integrator_name_ = integrator_->name();
 
   ConfigTable checks = root.table("checks");
@@ -295,7 +307,15 @@ DiagnosticsRow Simulation<D>::diagnostics(double t, double dt, const double* y) 
     vmax2 = std::max(vmax2, v2);
     dev = std::max(dev, std::abs(rho[i] / rho0 - 1.0));
   }
-  return {t, dt, ke, mass, std::sqrt(vmax2), dev};
+  DiagnosticsRow row{t, dt, ke, mass, std::sqrt(vmax2), dev, {}};
+  std::size_t k = 0;
+  for (const auto& hk : system_.hooks) {
+    hook_values_.clear();
+    hk->diagnostics(hook_values_);
+    for (double v : hook_values_)
+      if (k < kMaxExtraDiagnostics) row.extra[k++] = v;
+  }
+  return row;
 }
 
 template <int D>
@@ -346,13 +366,16 @@ std::string Simulation<D>::describe() const {
      << " fluid, " << p.nFixed() << " fixed)\n"
      << "# dx = " << dx_ << " m, h = " << system_.kernel.h << " m, kernel " << kernelName(system_.kernel.type)
      << " (support " << system_.kernel.supportRadius() << " m)\n";
-  if (const PressureModel* m = system_.pressureModel())
+  if (const PressureModel* m = system_.pressureModel()) {
     os << "# sound speed c = " << m->soundSpeed() << " m/s";
-  if (const PressureModel* m = system_.pressureModel(); m && m->designDensityVariation() > 0)
-    os << " (density variation delta = " << m->designDensityVariation() << ")";
-  os << "\n# effects:";
+    if (m->designDensityVariation() > 0) os << " (density variation delta = " << m->designDensityVariation() << ")";
+    os << "\n";
+  }
+  os << "# effects:";
   for (const auto& e : system_.effects) os << ' ' << e->name();
-  os << "\n# integrator " << integrator_name_ << "; output at " << output_times_.size() << " times up to "
+  os << "\n# pressure scheme " << scheme_ << "\n";
+  for (const auto& hk : system_.hooks) os << hk->describe();
+  os << "# integrator " << integrator_name_ << "; output at " << output_times_.size() << " times up to "
      << t_end_ << " s\n";
   os << "# stability inputs: h = " << s.h << " m, c = " << s.sound_speed << " m/s, nu = " << s.kinematic_viscosity
      << " m^2/s, |g| = " << system_.bodyAcceleration().norm() << " m/s^2\n";
@@ -368,7 +391,7 @@ RunReport Simulation<D>::run(const RunOptions& opt) {
   if (!opt.output_dir.empty())
     writer = std::make_unique<OutputWriter<D>>(opt.output_dir, header_.name,
                                                FileAttributes{D, resolved_scene_, dx_, system_.kernel.h,
-                                                              std::string(kernelName(system_.kernel.type))});
+                                                              std::string(kernelName(system_.kernel.type)), hookColumns()});
   std::vector<DiagnosticsRow> pending;
   std::vector<double> scratch(y_.size());
   std::uint64_t steps = 0;
@@ -410,6 +433,7 @@ RunReport Simulation<D>::run(const RunOptions& opt) {
   RunStatus status = RunStatus::ok;
   std::string message;
   try {
+    for (auto& hk : system_.hooks) hk->start(system_, 0.0, y_.data());
     integrator_->start(system_, 0.0, y_.data());
     writeFrame(0.0, y_);
     for (double tout : output_times_) {
@@ -471,6 +495,8 @@ RunReport Simulation<D>::run(const RunOptions& opt) {
   s["integrator"] = integrator_name_;
   s["threads"] = omp_get_max_threads();
   s["max_density_deviation"] = max_dev_seen;
+  s["scheme"] = scheme_;
+  for (const auto& hk : system_.hooks) hk->summarize(s);
   if (const PressureModel* m = system_.pressureModel()) {
     s["sound_speed"] = m->soundSpeed();
     if (m->designDensityVariation() > 0) s["design_density_variation"] = m->designDensityVariation();
@@ -489,6 +515,15 @@ RunReport Simulation<D>::run(const RunOptions& opt) {
     }
   }
   return report;
+}
+
+template <int D>
+std::vector<std::string> Simulation<D>::hookColumns() const {
+  std::vector<std::string> cols;
+  for (const auto& hk : system_.hooks)
+    for (const std::string& c : hk->diagnosticsColumns()) cols.push_back(c);
+  if (cols.size() > kMaxExtraDiagnostics) throw std::logic_error("too many diagnostics columns from hooks");
+  return cols;
 }
 
 template class Simulation<2>;

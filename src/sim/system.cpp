@@ -33,6 +33,7 @@ void SphSystem<D>::setup(double spacing, double rest_density, double viscosity, 
   std::vector<Effect<D>*> all;
   for (auto& e : effects) all.push_back(e.get());
   Setup<D> s{particles, kernel, spacing, rest_density, viscosity, body_acceleration_, pressure_model_, &evolving_, &all};
+  for (auto& hk : hooks) hk->setup(s);
   for (auto& b : boundaries) b->setup(s);
   for (auto& e : effects) e->setup(s);
   particles.resizeFields();
@@ -200,10 +201,18 @@ StabilitySnapshot SphSystem<D>::stability() const {
 
 template <int D>
 bool SphSystem<D>::afterStep(double t, double dt, double* y) {
+  for (auto& hk : hooks) hk->apply(*this, t, dt, y);
   const std::size_t n = particles.n_moving;
   const AcceptedStep<D> step{t, dt, n, y, y + n * D, y + n * (D + 1)};
   for (auto& e : effects) e->afterStep(step);
   return observer ? observer(t, dt, y) : true;
+}
+
+template <int D>
+bool SphSystem<D>::afterStepChangesState() const {
+  for (const auto& hk : hooks)
+    if (hk->changesState()) return true;
+  return false;
 }
 
 template class SphSystem<2>;

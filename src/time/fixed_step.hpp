@@ -41,6 +41,7 @@ class FixedStepIntegrator : public Integrator {
       last_dt_ = dt;
       ++stats_.steps;
       if (!sys_->afterStep(t_, dt, y_)) return false;
+      if (sys_->afterStepChangesState()) evaluate(t_, y_, rate_.data());  // F at the projected state
     }
     return true;
   }

@@ -33,12 +33,12 @@ const std::vector<IntegratorEntry>& integratorRegistry() {
   return registry;
 }
 
-std::unique_ptr<Integrator> makeIntegrator(ConfigTable& cfg, const ReferenceScales& scales) {
+std::unique_ptr<Integrator> makeIntegrator(ConfigTable& cfg, const ReferenceScales& scales, double default_cfl) {
   std::vector<std::string> names;
   for (const auto& e : integratorRegistry()) names.push_back(e.name);
   const std::string type = cfg.choice("type", "leapfrog", names);
   StepControl c;
-  c.cfl = cfg.numberIn("cfl", 0.125, 1e-6, 1.0);
+  c.cfl = cfg.numberIn("cfl", default_cfl, 1e-6, 1.0);
   c.viscous_coefficient = cfg.numberIn("viscous_coefficient", 0.125, 1e-6, 1.0);
   c.force_coefficient = cfg.numberIn("force_coefficient", 0.25, 1e-6, 1.0);
   c.relaxation_coefficient = cfg.numberIn("relaxation_coefficient", 0.5, 1e-6, 2.0);

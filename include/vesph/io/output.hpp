@@ -3,6 +3,7 @@
 // the per-step diagnostics, DIR/<name>.xdmf describing the frames for ParaView/VisIt, and
 // DIR/summary.json. The HDF5 file is flushed after every frame and the XDMF file replaced
 // atomically, so whatever was written before a failure or an interruption stays readable.
+#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -14,8 +15,13 @@
 
 namespace vesph {
 
+// One row per accepted step. `extra` holds the columns of post-step hooks (the ISPH
+// projection: solver iterations, residual, times, divergence), named by
+// FileAttributes::extra_columns; scenes without such a hook write none.
+inline constexpr std::size_t kMaxExtraDiagnostics = 8;
 struct DiagnosticsRow {
   double time, dt, kinetic_energy, mass, max_speed, max_density_deviation;
+  std::array<double, kMaxExtraDiagnostics> extra{};
 };
 
 struct FileAttributes {
@@ -23,6 +29,7 @@ struct FileAttributes {
   std::string scene_toml;
   double dx = 0, h = 0;
   std::string kernel;
+  std::vector<std::string> extra_columns;  // diagnostics columns after the standard ones
 };
 
 template <int D>
@@ -55,6 +62,7 @@ class OutputWriter {
   std::int64_t file_ = -1;
   std::vector<FrameInfo> frames_;
   std::size_t diag_rows_ = 0;
+  std::vector<std::string> extra_columns_;
 };
 
 // Writes DIR/summary.json atomically.

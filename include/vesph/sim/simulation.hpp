@@ -67,6 +67,7 @@ class Simulation {
   void markWallLayers();
   DiagnosticsRow diagnostics(double t, double dt, const double* y) const;
   std::string checkState(const DiagnosticsRow& row, const double* y) const;
+  std::vector<std::string> hookColumns() const;
 
   Config& config_;
   SceneHeader header_;
@@ -79,6 +80,8 @@ class Simulation {
   std::vector<double> output_times_;
   double max_density_deviation_ = 0.5, max_speed_ = 0;
   std::string resolved_scene_;
+  std::string scheme_ = "wcsph";
+  mutable std::vector<double> hook_values_;
 };
 
 }  // namespace vesph

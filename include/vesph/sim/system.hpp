@@ -14,6 +14,7 @@
 #include "vesph/core/neighbours.hpp"
 #include "vesph/physics/effect.hpp"
 #include "vesph/physics/pair_driver.hpp"
+#include "vesph/sim/step_hook.hpp"
 #include "vesph/time/integrator.hpp"
 
 namespace vesph {
@@ -28,6 +29,9 @@ class SphSystem final : public OdeSystem {
   PairDriver<D> driver;
   std::vector<std::unique_ptr<Effect<D>>> effects;
   std::vector<std::unique_ptr<Boundary<D>>> boundaries;
+  // Run after every accepted step, in order, before the effects' afterStep and the observer
+  // (the ISPH projection, src/isph).
+  std::vector<std::unique_ptr<StepHook<D>>> hooks;
   // Called by afterStep (diagnostics, checks, interruption); returns false to stop.
   std::function<bool(double t, double dt, double* y)> observer;
 
@@ -42,6 +46,7 @@ class SphSystem final : public OdeSystem {
   void evaluate(double t, const double* y, double* ydot);
   StabilitySnapshot stability() const override;
   bool afterStep(double t, double dt, double* y) override;
+  bool afterStepChangesState() const override;
 
   void pack(double* y) const;
   void unpack(const double* y);

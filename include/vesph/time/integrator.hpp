@@ -78,6 +78,9 @@ class OdeSystem {
   virtual StabilitySnapshot stability() const = 0;
   // Called after each accepted step with the new state; returns false to stop the run.
   virtual bool afterStep(double t, double dt, double* y) = 0;
+  // Whether afterStep may change the state (a post-step projection): the fixed-step
+  // integrators then evaluate the right-hand side again at the changed state.
+  virtual bool afterStepChangesState() const { return false; }
 };
 
 struct IntegratorStats {
@@ -108,8 +111,9 @@ struct IntegratorEntry {
 };
 const std::vector<IntegratorEntry>& integratorRegistry();
 
-// Reads [integrator] (type and the step-control keys) and builds the integrator.
-std::unique_ptr<Integrator> makeIntegrator(ConfigTable& cfg, const ReferenceScales& scales);
+// Reads [integrator] (type and the step-control keys) and builds the integrator. default_cfl:
+// the CFL coefficient when the scene gives none (WCSPH 0.125; ISPH 0.175, thesis §3.5).
+std::unique_ptr<Integrator> makeIntegrator(ConfigTable& cfg, const ReferenceScales& scales, double default_cfl = 0.125);
 
 // The explicit Butcher tables of SUNDIALS 6.4.1 (integrator.table), by name without the
 // ARKODE_ prefix, with their order q and embedding order p (0: no embedding).

@@ -1,0 +1,160 @@
+#pragma once
+// Incompressible SPH: the projection of thesis §3.5 (Cummins & Rudman 1999) as a post-step
+// hook (DESIGN.md "ISPH"). The right-hand side of an ISPH scene has no pressure: the
+// integrator advances positions and velocities with the other forces (viscous, body, elastic)
+// over a step dt to the intermediate velocity v*. After the accepted step this hook
+//   1. flags the free surface at the accepted positions ([effects.free_surface], thesis §4.2);
+//   2. solves for the pressure: p = 0 on free-surface particles (Dirichlet), and on the other
+//      fluid particles the pressure Poisson equation of thesis §3.5,
+//          div(grad p / rho) = div(v*) / dt,
+//      with the divergence of the continuity equation (Fang eq. 26),
+//          div(v)_i = -(1/rho_i) sum_j m_j (v_i - v_j) . grad_i W_ij,
+//      and one of two Laplacians (solver.laplacian), both one kernel support wide:
+//        morris      thesis eq. (3.37) in the variable-density form of Cummins & Rudman (1999),
+//                        L p_i = sum_j k_ij (p_i - p_j),
+//                        k_ij = -8 rho_i m_j F_ij / (rho_i + rho_j)^2,  F_ij = (dW/dr)/r,
+//                    (L p ~ -lap p); it is exact for linear fields only where the kernel support
+//                    is full: a truncated support (the particle rows within a support of the
+//                    free surface) turns a linear pressure into a spurious source;
+//        consistent  (default) the same with the first-order error removed (Schwaiger 2008;
+//                    Fatehi & Manzari 2011):
+//                        L p_i = sum_j k_ij (p_i - p_j - r_ij . grad p_i),
+//                    grad p_i the renormalised gradient below: exact for linear fields on any
+//                    support, so a hydrostatic pressure is reproduced up to the free surface.
+//      The equation solved is L p_i = -rho_i div(v*)_i / dt. The projection is approximate
+//      (Cummins & Rudman): L is not the composition of the discrete divergence and gradient, so
+//      the divergence of the corrected velocity is reduced to the operators' truncation error,
+//      not to the solver tolerance. (The exact composition div_h G reaches two supports and
+//      annihilates pressure modes at the lattice scale: it is near-singular, and its solutions
+//      grew without bound in the hydrostatic tank; docs/theory.md.) Wall particles enter the
+//      source divergence with u_w + dt g: the wall pressure's hydrostatic part answers the body
+//      force's share of v*.n, which is not counted twice (a fluid at rest under gravity gets a
+//      zero source and exactly the hydrostatic pressure).
+//      The walls' pressure is extrapolated from the fluid as in WCSPH (Adami et al. 2012,
+//      eq. 27: p_w = sum_f p_f W_wf / sum_f W_wf + rho0 g . sum_f (r_w - r_f) W_wf / sum_f W_wf)
+//      and eliminated into the fluid rows: the discrete Neumann condition grad p . n = rho g . n;
+//      Incremental form (Goda 1979; van Kan 1986), when the scene lists
+//      [effects.pressure_gradient]: the right-hand side then carries the last projection's
+//      pressure p^n through the step (best with form = "renormalised", the gradient below), so
+//      that the integrator's stages see the pressure force; the projection solves
+//          L p^{n+1} = L p^n - rho_i div(v*)_i / dt
+//      (the same operator, the same Dirichlet and wall conditions; the walls enter the source
+//      at rest, since the hydrostatic wall offsets of p^{n+1} and p^n cancel) and corrects with
+//      p^{n+1} - p^n in step 3. A fluid in equilibrium then stays exactly in equilibrium: without
+//      it, the stages see v* = v + t g without the pressure that balances g, and the viscous
+//      term of a no-slip wall acts on that spurious motion (a splitting error of O(nu dt / h^2)).
+//      The incremental form starts from the pressure that makes the initial acceleration
+//      divergence-free (the same equation with v* the initial pressure-free acceleration and
+//      dt = 1): a fluid that starts at rest under gravity starts with its hydrostatic pressure.
+//   3. corrects velocities and positions of all fluid particles,
+//          v_i = v*_i - dt (G p)_i,  x_i = x_i - dt^2/2 (G p)_i   (incremental: G (p^{n+1} - p^n)),
+//      with G (solver.gradient) the renormalised difference form (default; Randles & Libersky
+//      1996, exact for linear pressure fields, also at the free surface and the walls),
+//          (G p)_i = (1/rho_i) M_i^-1 sum_j V_j (p_j - p_i) grad_i W_ij,
+//          M_i = -sum_j V_j F_ij r_ij r_ij^T,  V_j = m_j/rho_j
+//      (M_i = I where it is near-singular: smallest eigenvalue below 0.1, an isolated particle),
+//      or thesis eq. (3.17) (difference, M = I) or (3.18) (symmetric, momentum-conserving).
+//      The position correction is the pressure acceleration's share of the step taken as
+//      constant over it: a second-order integrator moved the particles by dt (v^n + v*)/2, so
+//      the corrected positions are the thesis' x^{n+1} = x^n + dt (v^n + v^{n+1})/2.
+// Without free-surface detection (closed or periodic domains) the pressure is fixed by
+// p = 0 at one fluid particle (the first), which makes the Neumann problem non-singular; the
+// mean of the right-hand side is removed first (solvability of the Neumann problem).
+// The matrix is assembled from the pairs inside the kernel support; when its pattern equals
+// the previous step's (no pair crossed the support, the free surface kept its particles), the
+// direct solvers keep their symbolic analysis.
+#include <chrono>
+#include <memory>
+#include <vector>
+
+#include "vesph/io/config.hpp"
+#include "vesph/isph/linear_solver.hpp"
+#include "vesph/sim/step_hook.hpp"
+
+namespace vesph {
+
+template <int D>
+class Projection final : public StepHook<D> {
+ public:
+  explicit Projection(ConfigTable& solver_table);
+
+  std::string_view name() const override { return "isph_projection"; }
+  void setup(Setup<D>& s) override;
+  bool changesState() const override { return true; }
+  void start(SphSystem<D>& system, double t, double* y) override;
+  void apply(SphSystem<D>& system, double t, double dt, double* y) override;
+  std::vector<std::string> diagnosticsColumns() const override;
+  void diagnostics(std::vector<double>& values) const override;
+  void summarize(nlohmann::json& summary) const override;
+  std::string describe() const override;
+
+  // Root-mean-square of the discrete divergence (1/s) over the pressure unknowns, before and
+  // after the last projection (the "after" value at the corrected positions).
+  double divergenceBefore() const { return last_.divergence_before; }
+  double divergenceAfter() const { return last_.divergence_after; }
+  const SolveReport& lastSolve() const { return last_.solve; }
+  std::size_t unknowns() const { return n_unknowns_; }
+
+ private:
+  struct LastProjection {
+    SolveReport solve;
+    double assembly_seconds = 0, solve_seconds = 0, divergence_before = 0, divergence_after = 0;
+  };
+  void flagFreeSurface(SphSystem<D>& sys, double t);
+  void numberUnknowns(const SphSystem<D>& sys);
+  void wallExtrapolation(const SphSystem<D>& sys);
+  void gradientRows(SphSystem<D>& sys);
+  void assemble(SphSystem<D>& sys, double dt);
+  double divergence(SphSystem<D>& sys, const Vec<D>& wall_shift);
+  void correct(SphSystem<D>& sys, double dt, double* y);
+  void storePressure(const SphSystem<D>& sys);
+
+  enum class Gradient { renormalised, difference, symmetric };
+  LinearSolverOptions options_;
+  Gradient gradient_ = Gradient::renormalised;
+  bool consistent_ = true, incremental_ = false;
+  std::vector<double> previous_pressure_;
+  std::unique_ptr<LinearSolver> solver_;
+  Effect<D>* free_surface_effect_ = nullptr;
+  const Field* surface_flag_ = nullptr;
+  Field* pressure_ = nullptr;
+  Vec<D> g_ = Vec<D>::Zero();
+  double rho0_ = 1;
+  bool pinned_ = false, has_free_surface_ = false;
+
+  // Unknowns: the fluid particles off the free surface (unknown_of_[i] = row or -1).
+  std::vector<int> unknown_of_, particle_of_;
+  std::size_t n_unknowns_ = 0;
+  // Wall extrapolation weights c_wf = W_wf / sum W, by neighbour-list entry of the wall
+  // particle's moving candidates, and its constant part b_w (hydrostatic), by fixed index.
+  std::vector<double> wall_weight_, wall_offset_;
+  // The pressure acceleration G p of each moving particle k as a linear combination of the
+  // pressures of k and its candidates: entries [start[k] + k, start[k+1] + k + 1) of the
+  // neighbour-list layout, the first for k itself (coefficient 0 beyond the support).
+  std::vector<Index> g_index_;
+  std::vector<Vec<D>> g_coef_;
+  // The system, row by row (per thread while assembling), and pattern bookkeeping.
+  struct RowBuffer {
+    std::vector<int> slot;       // column -> position in cols (or -1)
+    std::vector<int> cols, lengths;
+    std::vector<double> vals;
+  };
+  std::vector<RowBuffer> rows_;
+  std::vector<int> previous_outer_, previous_inner_;
+  std::size_t pattern_builds_ = 0;
+  bool pattern_changed_ = true;
+  SparseRowMatrix matrix_;
+  Eigen::VectorXd rhs_, solution_;
+  std::vector<double> divergence_, accel_;  // per moving particle: div v*, G p [n*D]
+
+  LastProjection last_;
+  std::uint64_t solves_ = 0, iterations_total_ = 0;
+  int iterations_max_ = 0;
+  double residual_max_ = 0, assembly_seconds_ = 0, solve_seconds_ = 0, correction_seconds_ = 0;
+  double divergence_ratio_max_ = 0;
+};
+
+template <int D>
+std::unique_ptr<StepHook<D>> makeProjection(ConfigTable& solver_table);
+
+}  // namespace vesph

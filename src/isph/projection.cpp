@@ -1,0 +1,568 @@
+// The ISPH projection hook; the method, its equations and references are in
+// include/vesph/isph/projection.hpp.
+#include "vesph/isph/projection.hpp"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include <Eigen/Eigenvalues>
+
+#include "vesph/sim/system.hpp"
+
+namespace vesph {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
+
+// The pair geometry of a neighbour-list candidate (the candidate list holds pairs out to the
+// support plus the skin; the assembly visits candidates itself so that the matrix pattern is
+// that of the list). Returns false outside the support.
+template <int D>
+struct CandidateGeometry {
+  const double* x;
+  const Domain<D>* domain;
+  double cut2, inv_h, w_scale, f_scale;
+
+  template <class Shape>
+  bool operator()(Shape, std::size_t i, std::size_t j, Vec<D>& rij, double& W, double& F) const {
+    double r2 = 0;
+    for (int a = 0; a < D; ++a) {
+      rij[a] = domain->image(a, x[D * i + a] - x[D * j + a]);
+      r2 += rij[a] * rij[a];
+    }
+    if (r2 >= cut2 || r2 == 0.0) return false;
+    const double q = std::sqrt(r2) * inv_h;
+    W = w_scale * Shape::f(q);
+    F = f_scale * Shape::df_over_q(q);
+    return true;
+  }
+};
+
+template <int D>
+CandidateGeometry<D> candidateGeometry(const SphSystem<D>& sys) {
+  const Kernel& k = sys.kernel;
+  return {sys.particles.position.data(), &sys.domain, k.supportRadius() * k.supportRadius(), 1.0 / k.h, k.w_scale,
+          k.dw_scale / k.h};
+}
+
+}  // namespace
+
+template <int D>
+Projection<D>::Projection(ConfigTable& cfg) {
+  // Defaults: the fastest choice measured from 10 000 to 160 000 particles (docs/performance.md).
+  options_.type = cfg.choice("linear_solver", "bicgstab", {"umfpack", "klu", "bicgstab"});
+  if (options_.type == "bicgstab") {
+    options_.preconditioner = cfg.choice("preconditioner", "diagonal", {"diagonal", "ilut"});
+    options_.tolerance = cfg.numberIn("tolerance", 1e-8, 1e-15, 1e-1, "relative residual");
+    options_.max_iterations = static_cast<int>(cfg.integer("max_iterations", 2000, 1, 1000000));
+    if (options_.preconditioner == "ilut") {
+      options_.ilut_drop_tolerance = cfg.numberIn("ilut_drop_tolerance", 1e-4, 0.0, 1.0);
+      options_.ilut_fill_factor = static_cast<int>(cfg.integer("ilut_fill_factor", 10, 1, 1000));
+    }
+  } else {
+    for (const char* key : {"preconditioner", "tolerance", "max_iterations", "ilut_drop_tolerance", "ilut_fill_factor"})
+      if (cfg.has(key))
+        cfg.fail(key, "no " + std::string(key) + " for the direct solver '" + options_.type +
+                          "' (it is a key of linear_solver = \"bicgstab\")");
+  }
+  consistent_ = cfg.choice("laplacian", "consistent", {"consistent", "morris"}) == "consistent";
+  const std::string g = cfg.choice("gradient", "renormalised", {"renormalised", "difference", "symmetric"});
+  gradient_ = g == "renormalised" ? Gradient::renormalised : g == "difference" ? Gradient::difference : Gradient::symmetric;
+  solver_ = makeLinearSolver(options_);
+}
+
+template <int D>
+void Projection<D>::setup(Setup<D>& s) {
+  struct Forbidden {
+    const char* effect;
+    const char* why;
+  };
+  for (const Forbidden& f :
+       {Forbidden{"equation_of_state", "ISPH takes the pressure from the Poisson equation, not from an equation of state"},
+        Forbidden{"continuity", "ISPH particles keep their density (the projection keeps the velocity divergence-free)"},
+        Forbidden{"artificial_viscosity", "the artificial viscosity of Fang et al. is built on the WCSPH sound speed"}})
+    if (s.find(f.effect))
+      throw InputError(std::string("effects.") + f.effect + ": not with solver.scheme = \"isph\" (" + f.why +
+                       "); remove it, or use scheme = \"wcsph\"");
+  pressure_ = &s.particles.fields.require("pressure", 1, Field::Range::all);
+  has_free_surface_ = s.find("free_surface") != nullptr;
+  // With [effects.pressure_gradient] the right-hand side carries the last projection's
+  // pressure through the step, and the projection corrects it (incremental form, header).
+  incremental_ = s.find("pressure_gradient") != nullptr;
+  g_ = s.body_acceleration;
+  rho0_ = s.rest_density;
+}
+
+template <int D>
+void Projection<D>::flagFreeSurface(SphSystem<D>& sys, double t) {
+  if (!free_surface_effect_) {
+    for (auto& e : sys.effects)
+      if (e->name() == "free_surface") free_surface_effect_ = e.get();
+    surface_flag_ = sys.particles.fields.find("free_surface");
+  }
+  if (!free_surface_effect_) return;
+  const RhsContext<D> ctx{sys.particles, sys.kernel, sys.domain, t, nullptr, nullptr, nullptr, nullptr};
+  Effect<D>* e = free_surface_effect_;
+  sys.driver.run(ctx, sys.neighbours, std::span<Effect<D>* const>(&e, 1));
+}
+
+template <int D>
+void Projection<D>::numberUnknowns(const SphSystem<D>& sys) {
+  const std::size_t n = sys.particles.n_moving;
+  unknown_of_.assign(n, -1);
+  particle_of_.clear();
+  std::size_t surface = 0;
+  for (std::size_t i = 0; i < n; ++i)
+    if (surface_flag_ && surface_flag_->data[i] > 0.5) ++surface;
+  // No Dirichlet particle at all: the pure Neumann problem fixes p only up to a constant;
+  // p = 0 at the first fluid particle fixes it.
+  pinned_ = surface == 0;
+  for (std::size_t i = pinned_ ? 1 : 0; i < n; ++i) {
+    if (surface_flag_ && surface_flag_->data[i] > 0.5) continue;
+    unknown_of_[i] = static_cast<int>(particle_of_.size());
+    particle_of_.push_back(static_cast<int>(i));
+  }
+  n_unknowns_ = particle_of_.size();
+}
+
+template <int D>
+void Projection<D>::wallExtrapolation(const SphSystem<D>& sys) {
+  const ParticleSet<D>& P = sys.particles;
+  const NeighbourList<D>& list = sys.neighbours;
+  const std::size_t n = P.n_moving, N = P.size();
+  wall_weight_.resize(list.nbr.size());
+  wall_offset_.assign(N - n, 0.0);
+  const CandidateGeometry<D> geo = candidateGeometry(sys);
+  const Vec<D> rho_g = rho0_ * g_;
+  sys.kernel.visit([&](auto shape) {
+#pragma omp parallel for schedule(static) if (N - n >= kParallelMinimum)
+    for (std::size_t w = n; w < N; ++w) {
+      double sumW = 0, offset = 0;
+      Vec<D> rij;
+      double W, F;
+      for (std::size_t k = list.start[w]; k < list.split[w]; ++k) {
+        if (geo(shape, w, list.nbr[k], rij, W, F)) {
+          wall_weight_[k] = W;
+          sumW += W;
+          offset += rho_g.dot(rij) * W;  // rij = r_w - r_f
+        } else {
+          wall_weight_[k] = 0.0;
+        }
+      }
+      const double inv = sumW > 0 ? 1.0 / sumW : 0.0;
+      for (std::size_t k = list.start[w]; k < list.split[w]; ++k) wall_weight_[k] *= inv;
+      wall_offset_[w - n] = offset * inv;
+    }
+  });
+}
+
+template <int D>
+double Projection<D>::divergence(SphSystem<D>& sys, const Vec<D>& wall_shift) {
+  const ParticleSet<D>& P = sys.particles;
+  const std::size_t n = P.n_moving;
+  divergence_.resize(n);
+  const double* v = P.velocity.data();
+  const double* m = P.mass.data();
+  const double* rho = P.density.data();
+  sys.driver.forEachMoving(P, sys.kernel, sys.domain, sys.neighbours, false,
+                           [&](Index i, std::span<const Neighbour<D>> moving, std::span<const Neighbour<D>> fixed) {
+                             double acc = 0;
+                             for (const Neighbour<D>& nb : moving) {
+                               double d = 0;
+                               for (int a = 0; a < D; ++a) d += (v[D * i + a] - v[D * nb.j + a]) * nb.rij[a];
+                               acc += m[nb.j] * d * nb.F;
+                             }
+                             for (const Neighbour<D>& nb : fixed) {
+                               double d = 0;
+                               for (int a = 0; a < D; ++a)
+                                 d += (v[D * i + a] - v[D * nb.j + a] - wall_shift[a]) * nb.rij[a];
+                               acc += m[nb.j] * d * nb.F;
+                             }
+                             divergence_[i] = -acc / rho[i];
+                           });
+  double sum2 = 0;
+  for (std::size_t r = 0; r < n_unknowns_; ++r) {
+    const double d = divergence_[static_cast<std::size_t>(particle_of_[r])];
+    sum2 += d * d;
+  }
+  return n_unknowns_ ? std::sqrt(sum2 / static_cast<double>(n_unknowns_)) : 0.0;
+}
+
+template <int D>
+void Projection<D>::gradientRows(SphSystem<D>& sys) {
+  const ParticleSet<D>& P = sys.particles;
+  const NeighbourList<D>& list = sys.neighbours;
+  const std::size_t n = P.n_moving;
+  const std::size_t entries = list.start[n] + n;
+  g_index_.resize(entries);
+  g_coef_.resize(entries);
+  const CandidateGeometry<D> geo = candidateGeometry(sys);
+  const double* m = P.mass.data();
+  const double* rho = P.density.data();
+  const Gradient form = gradient_;
+  using Mat = Eigen::Matrix<double, D, D>;
+  sys.kernel.visit([&](auto shape) {
+#pragma omp parallel for schedule(static) if (n >= kParallelMinimum)
+    for (std::size_t k = 0; k < n; ++k) {
+      const std::size_t e0 = list.start[k] + k;
+      Vec<D> rkj;
+      double W, F;
+      // Renormalisation M_k = -sum_j V_j F r r^T (identity for the plain forms).
+      Mat Minv = Mat::Identity();
+      if (form == Gradient::renormalised) {
+        Mat M = Mat::Zero();
+        for (std::size_t c = list.start[k]; c < list.start[k + 1]; ++c) {
+          const std::size_t j = list.nbr[c];
+          if (geo(shape, k, j, rkj, W, F)) M -= (m[j] / rho[j] * F) * rkj * rkj.transpose();
+        }
+        Eigen::SelfAdjointEigenSolver<Mat> eig(M, Eigen::EigenvaluesOnly);
+        if (eig.eigenvalues().minCoeff() > 0.1) Minv = M.inverse();
+      }
+      Vec<D> self = Vec<D>::Zero();
+      const double rhok = rho[k];
+      for (std::size_t c = list.start[k]; c < list.start[k + 1]; ++c) {
+        const std::size_t j = list.nbr[c];
+        const std::size_t e = e0 + 1 + (c - list.start[k]);
+        g_index_[e] = static_cast<Index>(j);
+        if (!geo(shape, k, j, rkj, W, F)) {
+          g_coef_[e].setZero();
+          continue;
+        }
+        if (form == Gradient::symmetric) {  // thesis eq. (3.18)
+          g_coef_[e] = (m[j] / (rho[j] * rho[j]) * F) * rkj;
+          self += (m[j] / (rhok * rhok) * F) * rkj;
+        } else {  // thesis eq. (3.17), renormalised or not
+          g_coef_[e] = (m[j] / rho[j] * F / rhok) * (Minv * rkj);
+          self -= g_coef_[e];
+        }
+      }
+      g_index_[e0] = static_cast<Index>(k);
+      g_coef_[e0] = self;
+    }
+  });
+}
+
+template <int D>
+void Projection<D>::assemble(SphSystem<D>& sys, double dt) {
+  const ParticleSet<D>& P = sys.particles;
+  const NeighbourList<D>& list = sys.neighbours;
+  const std::size_t n = P.n_moving, rows = n_unknowns_;
+  rhs_.resize(static_cast<Eigen::Index>(rows));
+  const int threads = rows >= kParallelMinimum ? omp_get_max_threads() : 1;
+  if (rows_.size() < static_cast<std::size_t>(threads)) rows_.resize(static_cast<std::size_t>(threads));
+  const CandidateGeometry<D> geo = candidateGeometry(sys);
+  const double* m = P.mass.data();
+  const double* rho = P.density.data();
+  const double inv_dt = 1.0 / dt;
+  const bool consistent = consistent_;
+  const double* p_old = pressure_->data.data();  // the last projection's pressure (walls too)
+  const bool incremental = incremental_;
+
+  sys.kernel.visit([&](auto shape) {
+#pragma omp parallel num_threads(threads)
+    {
+      const std::size_t t = static_cast<std::size_t>(omp_get_thread_num());
+      const std::size_t nt = static_cast<std::size_t>(omp_get_num_threads());
+      RowBuffer& rb = rows_[t];
+      if (rb.slot.size() < rows) rb.slot.assign(rows, -1);
+      rb.cols.clear();
+      rb.vals.clear();
+      rb.lengths.clear();
+      std::vector<std::pair<int, double>> sorted;
+      const std::size_t r0 = rows * t / nt, r1 = rows * (t + 1) / nt;
+      for (std::size_t r = r0; r < r1; ++r) {
+        const std::size_t i = static_cast<std::size_t>(particle_of_[r]);
+        const std::size_t row_begin = rb.cols.size();
+        double constant = 0;  // the wall pressures' hydrostatic parts, moved to the right side
+        double l_old = 0;     // incremental form: the operator applied to the last pressure
+        auto column = [&](int u, double value) {
+          int& s = rb.slot[static_cast<std::size_t>(u)];
+          if (s < 0) {
+            s = static_cast<int>(rb.cols.size());
+            rb.cols.push_back(u);
+            rb.vals.push_back(value);
+          } else {
+            rb.vals[static_cast<std::size_t>(s)] += value;
+          }
+        };
+        // value * p_q, q a fluid particle (an unknown, or p = 0) or a wall particle (p_w
+        // eliminated: sum_f c_wf p_f + b_w).
+        auto add = [&](std::size_t q, double value) {
+          if (incremental) l_old += value * p_old[q];
+          if (q < n) {
+            if (unknown_of_[q] >= 0) column(unknown_of_[q], value);
+            return;
+          }
+          constant += value * wall_offset_[q - n];
+          for (std::size_t kk = list.start[q]; kk < list.split[q]; ++kk) {
+            const double c = wall_weight_[kk];
+            const int u = unknown_of_[list.nbr[kk]];
+            if (c != 0.0 && u >= 0) column(u, value * c);
+          }
+        };
+        column(static_cast<int>(r), 0.0);  // the diagonal is always stored
+        Vec<D> rij;
+        double W, F;
+        // sum_j k_ij (p_i - p_j) [- zeta_i . grad p_i] = -rho_i div(v*)_i / dt,
+        // k_ij = -8 rho_i m_j F_ij / (rho_i + rho_j)^2 > 0, zeta_i = sum_j k_ij r_ij (header).
+        Vec<D> zeta = Vec<D>::Zero();
+        double trace_m = 0;  // tr M_i = -sum_j V_j F_ij r_ij^2 (D on a full support)
+        for (std::size_t c = list.start[i]; c < list.start[i + 1]; ++c) {
+          const std::size_t j = list.nbr[c];
+          if (!geo(shape, i, j, rij, W, F)) continue;
+          const double s = rho[i] + rho[j];
+          const double kij = -8.0 * rho[i] * m[j] * F / (s * s);
+          add(i, kij);
+          add(j, -kij);
+          zeta += kij * rij;
+          trace_m -= m[j] / rho[j] * F * rij.squaredNorm();
+        }
+        if (consistent) {
+          // grad p_i = rho_i (G p)_i through the gradient row of i
+          zeta *= -rho[i];
+          const std::size_t e0 = list.start[i] + i, e1 = list.start[i + 1] + i + 1;
+          for (std::size_t e = e0; e < e1; ++e) {
+            const double v = zeta.dot(g_coef_[e]);
+            if (v != 0.0) add(g_index_[e], v);
+          }
+        }
+        // Consistent form: the operator scaled by D / tr M_i, so that it measures the second
+        // derivatives with the weight of a full support also where the support is truncated
+        // (near the free surface the plain sum is about half as large, and the projection
+        // over-corrected there: an instability of the surface rows, docs/theory.md).
+        const double scale = consistent && trace_m > 0 ? D / trace_m : 1.0;
+        if (scale != 1.0)
+          for (std::size_t q = row_begin; q < rb.vals.size(); ++q) rb.vals[q] *= scale;
+        rhs_[static_cast<Eigen::Index>(r)] = -rho[i] * divergence_[i] * inv_dt + scale * (l_old - constant);
+        // Sort the row by column; reset the slots.
+        const std::size_t len = rb.cols.size() - row_begin;
+        sorted.resize(len);
+        for (std::size_t q = 0; q < len; ++q) {
+          sorted[q] = {rb.cols[row_begin + q], rb.vals[row_begin + q]};
+          rb.slot[static_cast<std::size_t>(rb.cols[row_begin + q])] = -1;
+        }
+        std::sort(sorted.begin(), sorted.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+        for (std::size_t q = 0; q < len; ++q) {
+          rb.cols[row_begin + q] = sorted[q].first;
+          rb.vals[row_begin + q] = sorted[q].second;
+        }
+        rb.lengths.push_back(static_cast<int>(len));
+      }
+    }
+  });
+
+  // Gather the rows (threads hold consecutive row ranges) into the compressed matrix.
+  std::size_t nnz = 0;
+  for (int t = 0; t < threads; ++t) nnz += rows_[static_cast<std::size_t>(t)].cols.size();
+  matrix_.resize(static_cast<Eigen::Index>(rows), static_cast<Eigen::Index>(rows));
+  matrix_.resizeNonZeros(static_cast<Eigen::Index>(nnz));
+  int* outer = matrix_.outerIndexPtr();
+  int* inner = matrix_.innerIndexPtr();
+  double* val = matrix_.valuePtr();
+  std::size_t r = 0, e = 0;
+  outer[0] = 0;
+  for (int t = 0; t < threads; ++t) {
+    const RowBuffer& rb = rows_[static_cast<std::size_t>(t)];
+    std::copy(rb.cols.begin(), rb.cols.end(), inner + e);
+    std::copy(rb.vals.begin(), rb.vals.end(), val + e);
+    for (int len : rb.lengths) {
+      e += static_cast<std::size_t>(len);
+      outer[++r] = static_cast<int>(e);
+    }
+  }
+  pattern_changed_ = previous_outer_.size() != rows + 1 || previous_inner_.size() != nnz ||
+                     !std::equal(previous_outer_.begin(), previous_outer_.end(), outer) ||
+                     !std::equal(previous_inner_.begin(), previous_inner_.end(), inner);
+  if (pattern_changed_) {
+    previous_outer_.assign(outer, outer + rows + 1);
+    previous_inner_.assign(inner, inner + nnz);
+    ++pattern_builds_;
+  }
+}
+
+template <int D>
+void Projection<D>::correct(SphSystem<D>& sys, double dt, double* y) {
+  ParticleSet<D>& P = sys.particles;
+  const NeighbourList<D>& list = sys.neighbours;
+  const std::size_t n = P.n_moving;
+  accel_.resize(n * D);
+  const double* p = pressure_->data.data();
+  const double* p_old = previous_pressure_.data();
+  const bool incremental = incremental_;
+  double* yx = y;
+  double* yv = y + n * (D + 1);
+  const double half_dt2 = 0.5 * dt * dt;
+#pragma omp parallel for schedule(static) if (n >= kParallelMinimum)
+  for (std::size_t k = 0; k < n; ++k) {
+    Vec<D> a = Vec<D>::Zero();
+    const std::size_t e0 = list.start[k] + k, e1 = list.start[k + 1] + k + 1;
+    for (std::size_t e = e0; e < e1; ++e) {
+      const Index q = g_index_[e];
+      a += (incremental ? p[q] - p_old[q] : p[q]) * g_coef_[e];
+    }
+    for (int c = 0; c < D; ++c) {
+      accel_[D * k + c] = a[c];
+      yv[D * k + c] -= dt * a[c];
+      yx[D * k + c] -= half_dt2 * a[c];
+      P.velocity[D * k + c] = yv[D * k + c];
+      P.position[D * k + c] = sys.domain.wrap(c, yx[D * k + c]);
+    }
+  }
+}
+
+template <int D>
+void Projection<D>::storePressure(const SphSystem<D>& sys) {
+  // Fluid: the solution on the unknowns, 0 on the free surface (and the pinned particle);
+  // walls: the extrapolation p_w = sum_f c_wf p_f + b_w of the header.
+  const std::size_t n = sys.particles.n_moving, N = sys.particles.size();
+  double* p = pressure_->data.data();
+  for (std::size_t i = 0; i < n; ++i) p[i] = 0.0;
+  for (std::size_t r = 0; r < n_unknowns_; ++r) p[particle_of_[r]] = solution_[static_cast<Eigen::Index>(r)];
+  const NeighbourList<D>& list = sys.neighbours;
+  for (std::size_t w = n; w < N; ++w) {
+    double pw = wall_offset_[w - n];
+    for (std::size_t k = list.start[w]; k < list.split[w]; ++k) pw += wall_weight_[k] * p[list.nbr[k]];
+    p[w] = pw;
+  }
+}
+
+template <int D>
+void Projection<D>::start(SphSystem<D>& sys, double t, double* y) {
+  if (!incremental_) return;
+  ParticleSet<D>& P = sys.particles;
+  const std::size_t n = P.n_moving;
+  // The pressure-free acceleration of the initial state (the pressure field is zero).
+  std::vector<double> rate(sys.size());
+  sys.evaluate(t, y, rate.data());
+  const double* dvdt = rate.data() + n * (D + 1);
+  // The projection of that acceleration, as a velocity over dt = 1, without the correction.
+  for (std::size_t k = 0; k < n * D; ++k) P.velocity[k] = dvdt[k];
+  flagFreeSurface(sys, t);
+  numberUnknowns(sys);
+  wallExtrapolation(sys);
+  // As in the plain form: the walls move with g in the source (the hydrostatic wall offsets
+  // answer it), since there is no previous pressure whose offsets would cancel them.
+  divergence(sys, g_);
+  gradientRows(sys);
+  assemble(sys, 1.0);
+  solution_.setZero(static_cast<Eigen::Index>(n_unknowns_));
+  const SolveReport rep = n_unknowns_ ? solver_->solve(matrix_, pattern_changed_, rhs_, solution_) : SolveReport{true, 0, 0.0, {}};
+  if (!rep.ok) throw NumericalFailure("ISPH initial pressure solve failed: " + rep.message);
+  storePressure(sys);
+  sys.unpack(y);  // the velocities back
+}
+
+template <int D>
+void Projection<D>::apply(SphSystem<D>& sys, double t, double dt, double* y) {
+  const auto t0 = Clock::now();
+  ParticleSet<D>& P = sys.particles;
+  const std::size_t N = P.size();
+  sys.unpack(y);
+  if (sys.neighbours.update(P)) sys.driver.prepare(sys.neighbours);
+  flagFreeSurface(sys, t);
+  numberUnknowns(sys);
+  wallExtrapolation(sys);
+  // The divergence of v* with the walls at rest (reported, and the source of the incremental
+  // form); the plain form's source counts the walls with u_w + dt g (header).
+  last_.divergence_before = divergence(sys, Vec<D>::Zero());
+  if (!incremental_) divergence(sys, Vec<D>(dt * g_));
+  gradientRows(sys);
+  assemble(sys, dt);
+  // A closed domain (pinned pressure): the Neumann problem has a solution only when the
+  // sources sum to zero; the discrete sources do not quite, and the pin would take the
+  // remainder as a point source at one particle. Removing the mean spreads it evenly.
+  if (pinned_ && n_unknowns_ > 0) rhs_.array() -= rhs_.mean();
+  const auto t1 = Clock::now();
+
+  // Warm start (iterative solver): the previous pressure.
+  double* p = pressure_->data.data();
+  solution_.resize(static_cast<Eigen::Index>(n_unknowns_));
+  for (std::size_t r = 0; r < n_unknowns_; ++r) solution_[static_cast<Eigen::Index>(r)] = p[particle_of_[r]];
+  last_.solve = n_unknowns_ ? solver_->solve(matrix_, pattern_changed_, rhs_, solution_) : SolveReport{true, 0, 0.0, {}};
+  const auto t2 = Clock::now();
+  if (!last_.solve.ok) {
+    std::ostringstream os;
+    os << "ISPH pressure solve failed at t = " << t << " s (" << n_unknowns_ << " unknowns): " << last_.solve.message;
+    throw NumericalFailure(os.str());
+  }
+
+  if (incremental_) previous_pressure_.assign(p, p + N);
+  storePressure(sys);
+  correct(sys, dt, y);
+  // After the correction, at the corrected positions (moved by dt^2/2 G p).
+  last_.divergence_after = divergence(sys, Vec<D>::Zero());
+  const auto t3 = Clock::now();
+
+  last_.assembly_seconds = seconds(t0, t1);
+  last_.solve_seconds = seconds(t1, t2);
+  assembly_seconds_ += last_.assembly_seconds;
+  solve_seconds_ += last_.solve_seconds;
+  correction_seconds_ += seconds(t2, t3);
+  ++solves_;
+  iterations_total_ += static_cast<std::uint64_t>(last_.solve.iterations);
+  iterations_max_ = std::max(iterations_max_, last_.solve.iterations);
+  residual_max_ = std::max(residual_max_, last_.solve.residual);
+  if (last_.divergence_before > 0)
+    divergence_ratio_max_ = std::max(divergence_ratio_max_, last_.divergence_after / last_.divergence_before);
+}
+
+template <int D>
+std::vector<std::string> Projection<D>::diagnosticsColumns() const {
+  return {"solver_iterations", "solver_residual", "assembly_seconds", "solve_seconds", "divergence_before",
+          "divergence_after", "pressure_unknowns"};
+}
+
+template <int D>
+void Projection<D>::diagnostics(std::vector<double>& v) const {
+  v = {static_cast<double>(last_.solve.iterations), last_.solve.residual, last_.assembly_seconds, last_.solve_seconds,
+       last_.divergence_before, last_.divergence_after, static_cast<double>(n_unknowns_)};
+}
+
+template <int D>
+void Projection<D>::summarize(nlohmann::json& s) const {
+  nlohmann::json j;
+  j["linear_solver"] = solver_->name();
+  j["solves"] = solves_;
+  j["iterations_total"] = iterations_total_;
+  j["iterations_max"] = iterations_max_;
+  j["iterations_mean"] = solves_ ? static_cast<double>(iterations_total_) / static_cast<double>(solves_) : 0.0;
+  j["max_relative_residual"] = residual_max_;
+  j["assembly_seconds"] = assembly_seconds_;
+  j["solve_seconds"] = solve_seconds_;
+  j["correction_seconds"] = correction_seconds_;
+  j["seconds_per_solve"] = solves_ ? solve_seconds_ / static_cast<double>(solves_) : 0.0;
+  j["pattern_builds"] = pattern_builds_;
+  j["max_divergence_ratio"] = divergence_ratio_max_;
+  j["pressure_pinned"] = pinned_;
+  s["isph"] = j;
+}
+
+template <int D>
+std::string Projection<D>::describe() const {
+  std::ostringstream os;
+  const char* grad = gradient_ == Gradient::renormalised ? "renormalised difference form"
+                     : gradient_ == Gradient::difference ? "difference form (thesis 3.17)"
+                                                         : "symmetric form (thesis 3.18)";
+  os << "# ISPH projection after every step: Laplacian " << (consistent_ ? "consistent (exact for linear fields)" : "thesis eq. (3.37) / Morris")
+     << ", linear solver " << solver_->name() << ", pressure gradient " << grad << ";\n#   "
+     << (has_free_surface_ ? "p = 0 on the particles [effects.free_surface] flags"
+                           : "no free-surface detection: p = 0 at one pinned fluid particle (closed or periodic domain)")
+     << "\n";
+  return os.str();
+}
+
+template <int D>
+std::unique_ptr<StepHook<D>> makeProjection(ConfigTable& solver_table) {
+  return std::make_unique<Projection<D>>(solver_table);
+}
+
+template class Projection<2>;
+template class Projection<3>;
+template std::unique_ptr<StepHook<2>> makeProjection<2>(ConfigTable&);
+template std::unique_ptr<StepHook<3>> makeProjection<3>(ConfigTable&);
+
+}  // namespace vesph

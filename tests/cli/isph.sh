@@ -1,0 +1,77 @@
+# Incompressible SPH (solver.scheme = "isph", src/isph): the projection after every step.
+#  - transient Poiseuille (cases/poiseuille_newtonian_isph.toml, shortened to t = 0.1125 s)
+#    within the foundation's 2 % of the analytic solution under every integrator;
+#  - hydrostatic tank (cases/hydrostatic_tank_isph.toml, to t = 0.6 s): pressure within 2 % of
+#    rho g depth below the first three particle layers at every frame, max speed below
+#    1e-3 sqrt(g H) after settling (t >= 0.5 s; the start-up transient is 5e-3 at t = 0.1 s);
+#  - the linear solvers (umfpack, klu, bicgstab with diagonal and ILUT preconditioners) give
+#    the same pressure to the iterative tolerance;
+#  - a failed solve (BiCGSTAB limited to one iteration) stops the run with exit 3, the last good
+#    frame and summary.json (status "diverged");
+#  - scene errors: WCSPH effects in an ISPH scene, ISPH keys in a WCSPH scene, iterative keys
+#    with a direct solver exit 2 naming the key.
+. "$(dirname "$0")/lib.sh"
+P=$SRC/cases/poiseuille_newtonian_isph.toml
+T=$SRC/cases/hydrostatic_tank_isph.toml
+PSHORT="--set time.end=0.1125 --set output.times=[0.0225,0.1125]"
+
+for integ in leapfrog midpoint arkode-fixed arkode; do
+  extra=""
+  [ "$integ" = arkode ] && extra="--set integrator.reference_velocity=2.5e-5"
+  # shellcheck disable=SC2086
+  expect 0 "ok: finished" -- "$VESPH" run "$P" -o "$WORK/p_$integ" --quiet $PSHORT --set "integrator.type=\"$integ\"" $extra
+  $PY "$SRC/tools/poiseuille_check.py" "$WORK/p_$integ/poiseuille_newtonian_isph.h5" >"$WORK/p_$integ.log" 2>&1 && pass ||
+    fail "ISPH Poiseuille under $integ: $(tail -4 "$WORK/p_$integ.log")"
+done
+grep -q '"scheme": "isph"' "$WORK/p_leapfrog/summary.json" && grep -q '"solves"' "$WORK/p_leapfrog/summary.json" && pass ||
+  fail "summary.json lacks the ISPH solver figures"
+
+expect 0 "ok: finished" -- "$VESPH" run "$T" -o "$WORK/tank" --quiet --set time.end=0.6
+(cd "$SRC/tools" && $PY hydrostatic_check.py "$WORK/tank/hydrostatic_tank_isph.h5" --max-speed 1e9) >"$WORK/tank.log" 2>&1 && pass ||
+  fail "hydrostatic tank pressure: $(tail -5 "$WORK/tank.log")"
+(cd "$SRC/tools" && $PY hydrostatic_check.py "$WORK/tank/hydrostatic_tank_isph.h5" --from 0.5) >"$WORK/tank2.log" 2>&1 && pass ||
+  fail "hydrostatic tank after settling: $(tail -5 "$WORK/tank2.log")"
+$PY "$SRC/tools/check_output.py" "$WORK/tank" >"$WORK/tank_out.log" 2>&1 && pass || fail "tank output not valid: $(tail -3 "$WORK/tank_out.log")"
+
+# The solvers agree: 5 steps of the tank with each, final pressures compared.
+TSHORT="--set time.end=0.01 --set output.interval=0.01"
+for s in umfpack klu; do
+  # shellcheck disable=SC2086
+  expect 0 "ok: finished" -- "$VESPH" run "$T" -o "$WORK/s_$s" --quiet $TSHORT --set "solver.linear_solver=\"$s\""
+done
+for pc in diagonal ilut; do
+  # shellcheck disable=SC2086
+  expect 0 "ok: finished" -- "$VESPH" run "$T" -o "$WORK/s_$pc" --quiet $TSHORT --set 'solver.linear_solver="bicgstab"' \
+    --set "solver.preconditioner=\"$pc\"" --set solver.tolerance=1e-12 --set solver.max_iterations=20000
+done
+$PY - "$WORK" >"$WORK/agree.log" 2>&1 <<'PYEOF' && pass || fail "solvers disagree: $(tail -5 "$WORK/agree.log")"
+import sys, h5py, numpy as np
+w = sys.argv[1]
+def last(name):
+    with h5py.File(f"{w}/s_{name}/hydrostatic_tank_isph.h5", "r") as f:
+        fr = f["frames"][sorted(f["frames"])[-1]]
+        return fr["pressure"][:]
+ref = last("umfpack")
+scale = np.abs(ref).max()
+for name, tol in (("klu", 1e-9), ("diagonal", 1e-6), ("ilut", 1e-6)):
+    d = np.abs(last(name) - ref).max() / scale
+    print(name, d)
+    assert d < tol, f"{name}: max |p - p_umfpack| / max |p| = {d:.3e} >= {tol}"
+PYEOF
+
+# A failed solve: exit 3, last good frame, summary.
+expect 3 "ISPH (initial )?pressure solve failed.*no convergence" -- "$VESPH" run "$T" -o "$WORK/fail" --quiet $TSHORT \
+  --set 'solver.linear_solver="bicgstab"' --set solver.max_iterations=1 --set solver.tolerance=1e-14
+grep -q '"status": "diverged"' "$WORK/fail/summary.json" && pass || fail "failed solve: summary.json status is not diverged"
+$PY "$SRC/tools/check_output.py" "$WORK/fail" >"$WORK/fail.log" 2>&1 && pass || fail "failed solve: output not valid: $(tail -3 "$WORK/fail.log")"
+
+# Scene errors.
+expect 2 "effects.equation_of_state: not with solver.scheme = \"isph\"" -- "$VESPH" check "$T" --set 'effects.equation_of_state.sound_speed=10.0'
+expect 2 "effects.continuity: not with solver.scheme = \"isph\"" -- "$VESPH" check "$T" --set 'effects.continuity={}'
+expect 2 "solver.linear_solver: expected no linear_solver with scheme = \"wcsph\"" -- "$VESPH" check "$SCENE" --set 'solver.linear_solver="klu"'
+expect 2 "solver.tolerance: expected no tolerance for the direct solver 'umfpack'" -- "$VESPH" check "$T" --set solver.tolerance=1e-8
+expect 2 "solver.linear_solver: expected one of: umfpack, klu, bicgstab" -- "$VESPH" check "$T" --set 'solver.linear_solver="cholmod"'
+expect 2 "solver.scheme: expected one of: wcsph, isph" -- "$VESPH" check "$T" --set 'solver.scheme="sph"'
+expect 0 "ISPH projection after every step" -- "$VESPH" check "$T"
+expect 0 "umfpack" -- "$VESPH" list
+finish
