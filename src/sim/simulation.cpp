@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <random>
 #include <sstream>
 
 #include "vesph/boundary/dummy_walls.hpp"
@@ -160,6 +161,8 @@ void Simulation<D>::generateParticles(ConfigTable& root) {
     Vec<D> centre = Vec<D>::Zero();
     double radius = 0;
     Vec<D> velocity = Vec<D>::Zero();
+    double jitter = 0;       // fluid: random displacement of each particle, fraction of dx
+    std::uint64_t seed = 1;  // of the jitter's random sequence (reproducible)
   };
   const Vec<D> v0 = root.table("initial").vector<D>("velocity", Vec<D>::Zero(), "m/s");
   std::vector<Box> boxes;
@@ -170,7 +173,14 @@ void Simulation<D>::generateParticles(ConfigTable& root) {
     const std::string round_name = D == 2 ? "disk" : "sphere";
     const std::string shape = b.choice("shape", "box", {"box", round_name});
     Box box{kind == "fluid" ? ParticleKind::fluid : ParticleKind::wall, Vec<D>::Zero(), Vec<D>::Zero(), b.path()};
-    if (kind == "fluid") box.velocity = b.vector<D>("velocity", v0, "m/s");
+    if (kind == "fluid") {
+      box.velocity = b.vector<D>("velocity", v0, "m/s");
+      // A lattice aligned with the flow can persist as particle columns (the drop's opening,
+      // docs/validation.md §10); a small random displacement breaks it. Uniform in
+      // [-jitter/2, jitter/2] dx per axis; the mass stays rho0 dx^D.
+      box.jitter = b.numberIn("jitter", 0.0, 0.0, 0.5, "of the particle spacing");
+      box.seed = static_cast<std::uint64_t>(b.integer("seed", 1, 0, 1LL << 62));
+    }
     if (shape != "box") {
       if (kind != "fluid") b.fail("shape", "\"box\" for a wall block (walls are boxes of layers)");
       box.disk = true;
@@ -230,6 +240,19 @@ void Simulation<D>::generateParticles(ConfigTable& root) {
 
   const double mass = rho0_ * std::pow(dx_, D);
   ParticleSet<D>& p = system_.particles;
+  std::mt19937_64 rng;
+  const Box* rng_box = nullptr;
+  std::uniform_real_distribution<double> unit(-0.5, 0.5);
+  auto jitter = [&](const Box& b) -> Vec<D> {
+    Vec<D> d = Vec<D>::Zero();
+    if (b.jitter <= 0) return d;
+    if (rng_box != &b) {  // each block its own sequence, from its seed
+      rng.seed(b.seed);
+      rng_box = &b;
+    }
+    for (int a = 0; a < D; ++a) d[a] = b.jitter * dx_ * unit(rng);
+    return d;
+  };
   std::uint64_t next_id = 0;
   for (ParticleKind pass : {ParticleKind::fluid, ParticleKind::wall})
     for (const Box& b : boxes) {
@@ -242,7 +265,7 @@ void Simulation<D>::generateParticles(ConfigTable& root) {
         while (true) {
           Vec<D> off;
           for (int a = 0; a < D; ++a) off[a] = static_cast<double>(k[a]) * dx_;
-          if (off.squaredNorm() <= r2max) p.add(Vec<D>(b.centre + off), b.velocity, rho0_, mass, pass, next_id++);
+          if (off.squaredNorm() <= r2max) p.add(Vec<D>(b.centre + off + jitter(b)), b.velocity, rho0_, mass, pass, next_id++);
           int a = 0;
           while (a < D && ++k[a] > reach) k[a++] = -reach;
           if (a == D) break;
@@ -262,7 +285,7 @@ void Simulation<D>::generateParticles(ConfigTable& root) {
           x[a] = b.lo[a] + (static_cast<double>(rem % n[a]) + 0.5) * dx_;
           rem /= n[a];
         }
-        p.add(x, b.velocity, rho0_, mass, pass, next_id++);
+        p.add(Vec<D>(x + jitter(b)), b.velocity, rho0_, mass, pass, next_id++);
       }
     }
   if (p.n_moving == 0) root.fail("blocks", "at least one block of kind \"fluid\"");

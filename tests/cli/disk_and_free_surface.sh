@@ -59,6 +59,28 @@ if not np.allclose(v[~fl], 0.0): print("walls move"); ok = False
 print("flagged", int(surf.sum()), "of", int(fl.sum()))
 sys.exit(0 if ok else 1)
 PY
+# jitter: reproducible for a seed, different for another, within jitter/2 dx of the lattice
+for run in a b c; do
+  seed=1; [ $run = c ] && seed=2
+  expect 0 "ok: finished" -- "$VESPH" run "$WORK/drop.toml" -o "$WORK/jit_$run" --quiet --set time.end=1e-5 \
+    --set 'output.times=[1e-5]' --set blocks[0].jitter=0.2 --set blocks[0].seed=$seed
+done
+$PY - "$WORK" <<'PY' && pass || fail "jittered disk: not reproducible or not within the bound"
+import sys, h5py, numpy as np
+w = sys.argv[1]
+def first(run):
+    with h5py.File(f"{w}/jit_{run}/drop.h5", "r") as f:
+        g = f["frames"]["000000"]
+        return g["position"][...][g["kind"][...] == 0]
+a, b, c = first("a"), first("b"), first("c")
+dx = 2e-4
+lattice = np.round((a - [0.0, 0.04]) / dx) * dx + [0.0, 0.04]
+ok = np.array_equal(a, b) and not np.array_equal(a, c) and np.abs(a - lattice).max() <= 0.1 * dx * (1 + 1e-9) \
+     and np.abs(a - lattice).max() > 0.05 * dx
+print("max displacement / dx", np.abs(a - lattice).max() / dx)
+sys.exit(0 if ok else 1)
+PY
+expect 2 "blocks\[0\].jitter: expected a number in \[0, 0.5\]" -- "$VESPH" check "$WORK/drop.toml" --set blocks[0].jitter=0.7
 # errors
 sed -e '/^\[effects.free_surface\]/d' "$WORK/drop.toml" > "$WORK/no_detection.toml"
 expect 2 "free_surface_mirror needs .*add \[effects.free_surface\]" -- "$VESPH" check "$WORK/no_detection.toml"
