@@ -8,7 +8,7 @@
 #include <cmath>
 #include <sstream>
 
-#include <Eigen/Eigenvalues>
+#include "vesph/core/renormalisation.hpp"
 
 #include "vesph/sim/system.hpp"
 
@@ -19,8 +19,10 @@ using Clock = std::chrono::steady_clock;
 double seconds(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
 
 // The pair geometry of a neighbour-list candidate (the candidate list holds pairs out to the
-// support plus the skin; the assembly visits candidates itself so that the matrix pattern is
-// that of the list). Returns false outside the support.
+// support plus the skin). The assembly visits candidates itself, not through the pair driver,
+// because the gradient rows and the wall weights are stored by neighbour-list entry (a fixed
+// layout, allocated once per list build) and a row needs the lists of its neighbours too.
+// Returns false outside the support.
 template <int D>
 struct CandidateGeometry {
   const double* x;
@@ -219,8 +221,7 @@ void Projection<D>::gradientRows(SphSystem<D>& sys) {
           const std::size_t j = list.nbr[c];
           if (geo(shape, k, j, rkj, W, F)) M -= (m[j] / rho[j] * F) * rkj * rkj.transpose();
         }
-        Eigen::SelfAdjointEigenSolver<Mat> eig(M, Eigen::EigenvaluesOnly);
-        if (eig.eigenvalues().minCoeff() > 0.1) Minv = M.inverse();
+        Minv = renormalisationInverse<D>(M);
       }
       Vec<D> self = Vec<D>::Zero();
       const double rhok = rho[k];
@@ -389,7 +390,6 @@ void Projection<D>::correct(SphSystem<D>& sys, double dt, double* y) {
   ParticleSet<D>& P = sys.particles;
   const NeighbourList<D>& list = sys.neighbours;
   const std::size_t n = P.n_moving;
-  accel_.resize(n * D);
   const double* p = pressure_->data.data();
   const double* p_old = previous_pressure_.data();
   const bool incremental = incremental_;
@@ -405,7 +405,6 @@ void Projection<D>::correct(SphSystem<D>& sys, double dt, double* y) {
       a += (incremental ? p[q] - p_old[q] : p[q]) * g_coef_[e];
     }
     for (int c = 0; c < D; ++c) {
-      accel_[D * k + c] = a[c];
       yv[D * k + c] -= dt * a[c];
       yx[D * k + c] -= half_dt2 * a[c];
       P.velocity[D * k + c] = yv[D * k + c];

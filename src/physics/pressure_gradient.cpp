@@ -20,8 +20,7 @@
 // p_i = 0 and a mirror image of every neighbour carrying -p_j,
 //       dv_i/dt = - (2/rho_i) sum_j (m_j/rho_j) p_j grad_i W_ij
 // in place of the form above.
-#include <Eigen/Eigenvalues>
-
+#include "vesph/core/renormalisation.hpp"
 #include "vesph/physics/registry.hpp"
 
 namespace vesph {
@@ -118,8 +117,7 @@ class RenormalisedPressureGradient final : public PairEffect<D, RenormalisedPres
     l.raw += (vf * (l.p[nb.j] - l.pi)) * nb.rij;
   }
   void end(const RhsContext<D>& ctx, Index i, Local& l) const {
-    Eigen::SelfAdjointEigenSolver<Mat> eig(l.M, Eigen::EigenvaluesOnly);
-    const Vec<D> grad = eig.eigenvalues().minCoeff() > 0.1 ? Vec<D>(l.M.inverse() * l.raw) : l.raw;
+    const Vec<D> grad = renormalisationInverse<D>(l.M) * l.raw;
     const double inv_rho = 1.0 / ctx.particles.density[i];
     for (int a = 0; a < D; ++a) ctx.dvdt[D * i + a] -= grad[a] * inv_rho;
   }

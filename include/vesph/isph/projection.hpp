@@ -145,7 +145,7 @@ class Projection final : public StepHook<D> {
   bool pattern_changed_ = true;
   SparseRowMatrix matrix_;
   Eigen::VectorXd rhs_, solution_;
-  std::vector<double> divergence_, accel_;  // per moving particle: div v*, G p [n*D]
+  std::vector<double> divergence_;  // per moving particle: div v*
 
   LastProjection last_;
   std::uint64_t solves_ = 0, iterations_total_ = 0;

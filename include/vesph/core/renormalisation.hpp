@@ -1,0 +1,22 @@
+#pragma once
+// The kernel-gradient correction of Randles & Libersky (1996), shared by the renormalised
+// pressure gradient (src/physics/pressure_gradient.cpp) and the ISPH projection's gradient
+// rows (src/isph/projection.cpp):
+//   M_i = -sum_j V_j F_ij r_ij r_ij^T      (the identity on a full support, to quadrature error)
+//   grad f_i = M_i^-1 sum_j V_j (f_j - f_i) F_ij r_ij   exact for linear f on any support.
+// Where M_i is near-singular (an isolated particle, a filament: smallest eigenvalue below 0.1)
+// the inverse would amplify noise; the uncorrected sum (M = I) is used there.
+#include <Eigen/Eigenvalues>
+
+#include "vesph/core/types.hpp"
+
+namespace vesph {
+
+template <int D>
+Eigen::Matrix<double, D, D> renormalisationInverse(const Eigen::Matrix<double, D, D>& M) {
+  using Mat = Eigen::Matrix<double, D, D>;
+  Eigen::SelfAdjointEigenSolver<Mat> eig(M, Eigen::EigenvaluesOnly);
+  return eig.eigenvalues().minCoeff() > 0.1 ? Mat(M.inverse()) : Mat(Mat::Identity());
+}
+
+}  // namespace vesph
