@@ -16,6 +16,8 @@ namespace vesph {
 namespace {
 
 using Clock = std::chrono::steady_clock;
+// Relative diagonal shift of the exact projection's matrix (assemble()).
+constexpr double kExactShift = 1e-10;
 double seconds(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
 
 // The pair geometry of a neighbour-list candidate (the candidate list holds pairs out to the
@@ -74,6 +76,15 @@ Projection<D>::Projection(ConfigTable& cfg) {
   consistent_ = cfg.choice("laplacian", "consistent", {"consistent", "morris"}) == "consistent";
   const std::string g = cfg.choice("gradient", "renormalised", {"renormalised", "difference", "symmetric"});
   gradient_ = g == "renormalised" ? Gradient::renormalised : g == "difference" ? Gradient::difference : Gradient::symmetric;
+  cleaning_ = cfg.boolean("divergence_cleaning", false);
+  if (cleaning_) {
+    // Direct solvers only: the matrix is near-singular (header), and conjugate gradients did
+    // not reach 1e-8 in 5000 iterations on the 1520 unknowns of the hydrostatic tank.
+    cleaning_options_.type = cfg.choice("cleaning_solver", "umfpack", {"umfpack", "klu"});
+    cleaning_solver_ = makeLinearSolver(cleaning_options_);
+  } else {
+    if (cfg.has("cleaning_solver")) cfg.fail("cleaning_solver", "only with divergence_cleaning = true");
+  }
   solver_ = makeLinearSolver(options_);
 }
 
@@ -195,7 +206,7 @@ double Projection<D>::divergence(SphSystem<D>& sys, const Vec<D>& wall_shift) {
 }
 
 template <int D>
-void Projection<D>::gradientRows(SphSystem<D>& sys) {
+void Projection<D>::gradientRows(SphSystem<D>& sys, Gradient form, bool walls_enter) {
   const ParticleSet<D>& P = sys.particles;
   const NeighbourList<D>& list = sys.neighbours;
   const std::size_t n = P.n_moving;
@@ -205,7 +216,6 @@ void Projection<D>::gradientRows(SphSystem<D>& sys) {
   const CandidateGeometry<D> geo = candidateGeometry(sys);
   const double* m = P.mass.data();
   const double* rho = P.density.data();
-  const Gradient form = gradient_;
   using Mat = Eigen::Matrix<double, D, D>;
   sys.kernel.visit([&](auto shape) {
 #pragma omp parallel for schedule(static) if (n >= kParallelMinimum)
@@ -234,7 +244,7 @@ void Projection<D>::gradientRows(SphSystem<D>& sys) {
           continue;
         }
         if (form == Gradient::symmetric) {  // thesis eq. (3.18)
-          g_coef_[e] = (m[j] / (rho[j] * rho[j]) * F) * rkj;
+          g_coef_[e] = walls_enter || j < n ? Vec<D>((m[j] / (rho[j] * rho[j]) * F) * rkj) : Vec<D>::Zero();
           self += (m[j] / (rhok * rhok) * F) * rkj;
         } else {  // thesis eq. (3.17), renormalised or not
           g_coef_[e] = (m[j] / rho[j] * F / rhok) * (Minv * rkj);
@@ -248,7 +258,7 @@ void Projection<D>::gradientRows(SphSystem<D>& sys) {
 }
 
 template <int D>
-void Projection<D>::assemble(SphSystem<D>& sys, double dt) {
+void Projection<D>::assemble(SphSystem<D>& sys, double dt, Laplacian op, bool incremental) {
   const ParticleSet<D>& P = sys.particles;
   const NeighbourList<D>& list = sys.neighbours;
   const std::size_t n = P.n_moving, rows = n_unknowns_;
@@ -259,9 +269,17 @@ void Projection<D>::assemble(SphSystem<D>& sys, double dt) {
   const double* m = P.mass.data();
   const double* rho = P.density.data();
   const double inv_dt = 1.0 / dt;
-  const bool consistent = consistent_;
+  const bool consistent = op == Laplacian::consistent;
+  const bool exact = op == Laplacian::exact;
+  // Exact rows are weighted by the particle volume V_i (relative to the mean), which makes the
+  // matrix V div_h G = D M^-1 D^T V-weighted symmetric (header).
+  double mean_volume = 0;
+  if (exact) {
+    for (std::size_t r = 0; r < rows; ++r) mean_volume += m[particle_of_[r]] / rho[particle_of_[r]];
+    mean_volume = rows ? mean_volume / static_cast<double>(rows) : 1.0;
+  }
   const double* p_old = pressure_->data.data();  // the last projection's pressure (walls too)
-  const bool incremental = incremental_;
+  const double rho0 = rho0_;
 
   sys.kernel.visit([&](auto shape) {
 #pragma omp parallel num_threads(threads)
@@ -275,6 +293,21 @@ void Projection<D>::assemble(SphSystem<D>& sys, double dt) {
       rb.lengths.clear();
       std::vector<std::pair<int, double>> sorted;
       const std::size_t r0 = rows * t / nt, r1 = rows * (t + 1) / nt;
+      // Sort the row by column; reset the slots.
+      auto finishRow = [&](std::size_t row_begin) {
+        const std::size_t len = rb.cols.size() - row_begin;
+        sorted.resize(len);
+        for (std::size_t q = 0; q < len; ++q) {
+          sorted[q] = {rb.cols[row_begin + q], rb.vals[row_begin + q]};
+          rb.slot[static_cast<std::size_t>(rb.cols[row_begin + q])] = -1;
+        }
+        std::sort(sorted.begin(), sorted.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+        for (std::size_t q = 0; q < len; ++q) {
+          rb.cols[row_begin + q] = sorted[q].first;
+          rb.vals[row_begin + q] = sorted[q].second;
+        }
+        rb.lengths.push_back(static_cast<int>(len));
+      };
       for (std::size_t r = r0; r < r1; ++r) {
         const std::size_t i = static_cast<std::size_t>(particle_of_[r]);
         const std::size_t row_begin = rb.cols.size();
@@ -308,6 +341,33 @@ void Projection<D>::assemble(SphSystem<D>& sys, double dt) {
         column(static_cast<int>(r), 0.0);  // the diagonal is always stored
         Vec<D> rij;
         double W, F;
+        if (exact) {
+          // -rho_i div_h(G p)_i = -rho_i div(v*)_i / dt with the divergence of the continuity
+          // equation applied to the corrected velocities (walls keep theirs):
+          //   -rho_i div_h(u)_i = u_i . sum_j m_j F_ij r_ij - sum_{j moving} m_j F_ij r_ij . u_j,
+          // u_k = (G p)_k through the gradient row of k: two kernel supports wide.
+          // Row i times rho0 V_i / (rho_i V_mean): the matrix is then symmetric (header).
+          const double w = rho0 * m[i] / (rho[i] * rho[i] * mean_volume);
+          Vec<D> self = Vec<D>::Zero();
+          for (std::size_t c = list.start[i]; c < list.start[i + 1]; ++c) {
+            const std::size_t j = list.nbr[c];
+            if (!geo(shape, i, j, rij, W, F)) continue;
+            const Vec<D> a = (w * m[j] * F) * rij;
+            self += a;
+            if (j >= n) continue;
+            for (std::size_t e = list.start[j] + j, e1 = list.start[j + 1] + j + 1; e < e1; ++e) {
+              const double v = -a.dot(g_coef_[e]);
+              if (v != 0.0) add(g_index_[e], v);
+            }
+          }
+          for (std::size_t e = list.start[i] + i, e1 = list.start[i + 1] + i + 1; e < e1; ++e) {
+            const double v = self.dot(g_coef_[e]);
+            if (v != 0.0) add(g_index_[e], v);
+          }
+          rhs_[static_cast<Eigen::Index>(r)] = -w * rho[i] * divergence_[i] * inv_dt + (l_old - constant);
+          finishRow(row_begin);
+          continue;
+        }
         // sum_j k_ij (p_i - p_j) [- zeta_i . grad p_i] = -rho_i div(v*)_i / dt,
         // k_ij = -8 rho_i m_j F_ij / (rho_i + rho_j)^2 > 0, zeta_i = sum_j k_ij r_ij (header).
         Vec<D> zeta = Vec<D>::Zero();
@@ -339,19 +399,7 @@ void Projection<D>::assemble(SphSystem<D>& sys, double dt) {
         if (scale != 1.0)
           for (std::size_t q = row_begin; q < rb.vals.size(); ++q) rb.vals[q] *= scale;
         rhs_[static_cast<Eigen::Index>(r)] = -rho[i] * divergence_[i] * inv_dt + scale * (l_old - constant);
-        // Sort the row by column; reset the slots.
-        const std::size_t len = rb.cols.size() - row_begin;
-        sorted.resize(len);
-        for (std::size_t q = 0; q < len; ++q) {
-          sorted[q] = {rb.cols[row_begin + q], rb.vals[row_begin + q]};
-          rb.slot[static_cast<std::size_t>(rb.cols[row_begin + q])] = -1;
-        }
-        std::sort(sorted.begin(), sorted.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
-        for (std::size_t q = 0; q < len; ++q) {
-          rb.cols[row_begin + q] = sorted[q].first;
-          rb.vals[row_begin + q] = sorted[q].second;
-        }
-        rb.lengths.push_back(static_cast<int>(len));
+        finishRow(row_begin);
       }
     }
   });
@@ -375,6 +423,14 @@ void Projection<D>::assemble(SphSystem<D>& sys, double dt) {
       outer[++r] = static_cast<int>(e);
     }
   }
+  if (exact) {
+    // The exact operator is singular along the pressure modes that the gradient annihilates
+    // (checkerboards on a regular lattice). Those modes do not move the velocity, and the
+    // source has no component along them up to round-off, which the solvers cannot reach: a
+    // relative shift of the diagonal makes the matrix definite and changes the corrected
+    // velocity's divergence by about the shift (docs/theory.md §10).
+    for (std::size_t q = 0; q < rows; ++q) matrix_.coeffRef(static_cast<Eigen::Index>(q), static_cast<Eigen::Index>(q)) *= 1.0 + kExactShift;
+  }
   pattern_changed_ = previous_outer_.size() != rows + 1 || previous_inner_.size() != nnz ||
                      !std::equal(previous_outer_.begin(), previous_outer_.end(), outer) ||
                      !std::equal(previous_inner_.begin(), previous_inner_.end(), inner);
@@ -386,16 +442,16 @@ void Projection<D>::assemble(SphSystem<D>& sys, double dt) {
 }
 
 template <int D>
-void Projection<D>::correct(SphSystem<D>& sys, double dt, double* y) {
+void Projection<D>::correct(SphSystem<D>& sys, double dt, double* y, bool cleaning) {
   ParticleSet<D>& P = sys.particles;
   const NeighbourList<D>& list = sys.neighbours;
   const std::size_t n = P.n_moving;
-  const double* p = pressure_->data.data();
+  // The pressure (increment), or the cleaning multiplier (by unknown, 0 elsewhere).
+  const double* p = cleaning ? multiplier_.data() : pressure_->data.data();
   const double* p_old = previous_pressure_.data();
-  const bool incremental = incremental_;
-  double* yx = y;
+  const bool incremental = incremental_ && !cleaning;
   double* yv = y + n * (D + 1);
-  const double half_dt2 = 0.5 * dt * dt;
+  if (!cleaning) correction_.assign(n * D, 0.0);
 #pragma omp parallel for schedule(static) if (n >= kParallelMinimum)
   for (std::size_t k = 0; k < n; ++k) {
     Vec<D> a = Vec<D>::Zero();
@@ -406,10 +462,50 @@ void Projection<D>::correct(SphSystem<D>& sys, double dt, double* y) {
     }
     for (int c = 0; c < D; ++c) {
       yv[D * k + c] -= dt * a[c];
-      yx[D * k + c] -= half_dt2 * a[c];
       P.velocity[D * k + c] = yv[D * k + c];
-      P.position[D * k + c] = sys.domain.wrap(c, yx[D * k + c]);
+      correction_[D * k + c] += a[c];
     }
+  }
+}
+
+template <int D>
+void Projection<D>::clean(SphSystem<D>& sys, double t, double dt, double* y) {
+  // The exact projection of the corrected velocities (header): the source is their divergence
+  // at the same positions (walls at rest), the gradient the adjoint of that divergence (thesis
+  // eq. 3.18 without wall pressures), the multiplier is not a pressure and is not stored.
+  gradientRows(sys, Gradient::symmetric, false);
+  // Its own matrix and pattern record, so that the pressure solve keeps its symbolic analysis.
+  std::swap(matrix_, cleaning_matrix_);
+  std::swap(previous_outer_, cleaning_outer_);
+  std::swap(previous_inner_, cleaning_inner_);
+  const std::size_t builds = pattern_builds_;
+  assemble(sys, dt, Laplacian::exact, false);
+  const bool pattern_changed = pattern_changed_;
+  pattern_builds_ = builds;
+  std::swap(matrix_, cleaning_matrix_);
+  std::swap(previous_outer_, cleaning_outer_);
+  std::swap(previous_inner_, cleaning_inner_);
+  multiplier_.assign(sys.particles.size(), 0.0);
+  cleaning_solution_.setZero(static_cast<Eigen::Index>(n_unknowns_));
+  last_.cleaning = n_unknowns_ ? cleaning_solver_->solve(cleaning_matrix_, pattern_changed, rhs_, cleaning_solution_) : SolveReport{true, 0, 0.0, {}};
+  if (!last_.cleaning.ok) {
+    std::ostringstream os;
+    os << "ISPH divergence cleaning failed at t = " << t << " s (" << n_unknowns_ << " unknowns): " << last_.cleaning.message;
+    throw NumericalFailure(os.str());
+  }
+  for (std::size_t r = 0; r < n_unknowns_; ++r) multiplier_[particle_of_[r]] = cleaning_solution_[static_cast<Eigen::Index>(r)];
+  correct(sys, dt, y, true);
+}
+
+template <int D>
+void Projection<D>::correctPositions(SphSystem<D>& sys, double dt, double* y) {
+  ParticleSet<D>& P = sys.particles;
+  const std::size_t n = P.n_moving;
+  const double half_dt2 = 0.5 * dt * dt;
+  // y starts with the positions (SphSystem::pack)
+  for (std::size_t k = 0; k < n * D; ++k) {
+    y[k] -= half_dt2 * correction_[k];
+    P.position[k] = sys.domain.wrap(static_cast<int>(k % D), y[k]);
   }
 }
 
@@ -446,8 +542,8 @@ void Projection<D>::start(SphSystem<D>& sys, double t, double* y) {
   // As in the plain form: the walls move with g in the source (the hydrostatic wall offsets
   // answer it), since there is no previous pressure whose offsets would cancel them.
   divergence(sys, g_);
-  gradientRows(sys);
-  assemble(sys, 1.0);
+  gradientRows(sys, gradient_, true);
+  assemble(sys, 1.0, operator_(), incremental_);
   solution_.setZero(static_cast<Eigen::Index>(n_unknowns_));
   const SolveReport rep = n_unknowns_ ? solver_->solve(matrix_, pattern_changed_, rhs_, solution_) : SolveReport{true, 0, 0.0, {}};
   if (!rep.ok) throw NumericalFailure("ISPH initial pressure solve failed: " + rep.message);
@@ -469,8 +565,8 @@ void Projection<D>::apply(SphSystem<D>& sys, double t, double dt, double* y) {
   // form); the plain form's source counts the walls with u_w + dt g (header).
   last_.divergence_before = divergence(sys, Vec<D>::Zero());
   if (!incremental_) divergence(sys, Vec<D>(dt * g_));
-  gradientRows(sys);
-  assemble(sys, dt);
+  gradientRows(sys, gradient_, true);
+  assemble(sys, dt, operator_(), incremental_);
   // A closed domain (pinned pressure): the Neumann problem has a solution only when the
   // sources sum to zero; the discrete sources do not quite, and the pin would take the
   // remainder as a point source at one particle. Removing the mean spreads it evenly.
@@ -491,16 +587,30 @@ void Projection<D>::apply(SphSystem<D>& sys, double t, double dt, double* y) {
 
   if (incremental_) previous_pressure_.assign(p, p + N);
   storePressure(sys);
-  correct(sys, dt, y);
-  // After the correction, at the corrected positions (moved by dt^2/2 G p).
-  last_.divergence_after = divergence(sys, Vec<D>::Zero());
+  correct(sys, dt, y, false);
+  // The corrected velocities' divergence at the positions of the solve: what the projection
+  // acts on (the position correction that follows moves the operator by O(dt^2)).
+  last_.divergence_after = last_.divergence_projected = divergence(sys, Vec<D>::Zero());
   const auto t3 = Clock::now();
+  if (cleaning_) {
+    clean(sys, t, dt, y);
+    last_.divergence_after = divergence(sys, Vec<D>::Zero());
+  }
+  correctPositions(sys, dt, y);
+  const auto t4 = Clock::now();
 
   last_.assembly_seconds = seconds(t0, t1);
+  last_.cleaning_seconds = seconds(t3, t4);
+  cleaning_seconds_ += last_.cleaning_seconds;
   last_.solve_seconds = seconds(t1, t2);
   assembly_seconds_ += last_.assembly_seconds;
   solve_seconds_ += last_.solve_seconds;
   correction_seconds_ += seconds(t2, t3);
+  if (cleaning_) {
+    cleaning_iterations_total_ += static_cast<std::uint64_t>(last_.cleaning.iterations);
+    cleaning_iterations_max_ = std::max(cleaning_iterations_max_, last_.cleaning.iterations);
+    cleaning_residual_max_ = std::max(cleaning_residual_max_, last_.cleaning.residual);
+  }
   ++solves_;
   iterations_total_ += static_cast<std::uint64_t>(last_.solve.iterations);
   iterations_max_ = std::max(iterations_max_, last_.solve.iterations);
@@ -511,14 +621,19 @@ void Projection<D>::apply(SphSystem<D>& sys, double t, double dt, double* y) {
 
 template <int D>
 std::vector<std::string> Projection<D>::diagnosticsColumns() const {
-  return {"solver_iterations", "solver_residual", "assembly_seconds", "solve_seconds", "divergence_before",
-          "divergence_after", "pressure_unknowns"};
+  std::vector<std::string> c = {"solver_iterations", "solver_residual", "assembly_seconds", "solve_seconds",
+                                "divergence_before", "divergence_after", "pressure_unknowns"};
+  if (cleaning_) c.insert(c.end(), {"divergence_projected", "cleaning_iterations", "cleaning_residual", "cleaning_seconds"});
+  return c;
 }
 
 template <int D>
 void Projection<D>::diagnostics(std::vector<double>& v) const {
   v = {static_cast<double>(last_.solve.iterations), last_.solve.residual, last_.assembly_seconds, last_.solve_seconds,
        last_.divergence_before, last_.divergence_after, static_cast<double>(n_unknowns_)};
+  if (cleaning_)
+    v.insert(v.end(), {last_.divergence_projected, static_cast<double>(last_.cleaning.iterations), last_.cleaning.residual,
+                       last_.cleaning_seconds});
 }
 
 template <int D>
@@ -537,6 +652,13 @@ void Projection<D>::summarize(nlohmann::json& s) const {
   j["pattern_builds"] = pattern_builds_;
   j["max_divergence_ratio"] = divergence_ratio_max_;
   j["pressure_pinned"] = pinned_;
+  j["divergence_cleaning"] = cleaning_;
+  if (cleaning_) {
+    j["cleaning_iterations_total"] = cleaning_iterations_total_;
+    j["cleaning_iterations_max"] = cleaning_iterations_max_;
+    j["cleaning_max_relative_residual"] = cleaning_residual_max_;
+    j["cleaning_seconds"] = cleaning_seconds_;
+  }
   s["isph"] = j;
 }
 
@@ -551,6 +673,9 @@ std::string Projection<D>::describe() const {
      << (has_free_surface_ ? "p = 0 on the particles [effects.free_surface] flags"
                            : "no free-surface detection: p = 0 at one pinned fluid particle (closed or periodic domain)")
      << "\n";
+  if (cleaning_)
+    os << "#   then divergence cleaning: the exact projection onto discretely divergence-free velocities ("
+       << cleaning_solver_->name() << ")\n";
   return os.str();
 }
 

@@ -18,7 +18,7 @@ namespace vesph {
 // One row per accepted step. `extra` holds the columns of post-step hooks (the ISPH
 // projection: solver iterations, residual, times, divergence), named by
 // FileAttributes::extra_columns; scenes without such a hook write none.
-inline constexpr std::size_t kMaxExtraDiagnostics = 8;
+inline constexpr std::size_t kMaxExtraDiagnostics = 12;
 struct DiagnosticsRow {
   double time, dt, kinetic_energy, mass, max_speed, max_density_deviation;
   std::array<double, kMaxExtraDiagnostics> extra{};

@@ -25,8 +25,9 @@
 //      (Cummins & Rudman): L is not the composition of the discrete divergence and gradient, so
 //      the divergence of the corrected velocity is reduced to the operators' truncation error,
 //      not to the solver tolerance. (The exact composition div_h G reaches two supports and
-//      annihilates pressure modes at the lattice scale: it is near-singular, and its solutions
-//      grew without bound in the hydrostatic tank; docs/theory.md.) Wall particles enter the
+//      annihilates pressure modes at the lattice scale: as the pressure equation it is
+//      near-singular, and its solutions grew without bound in the hydrostatic tank; it serves
+//      the divergence cleaning of step 4 instead; docs/theory.md.) Wall particles enter the
 //      source divergence with u_w + dt g: the wall pressure's hydrostatic part answers the body
 //      force's share of v*.n, which is not counted twice (a fluid at rest under gravity gets a
 //      zero source and exactly the hydrostatic pressure).
@@ -57,6 +58,17 @@
 //      The position correction is the pressure acceleration's share of the step taken as
 //      constant over it: a second-order integrator moved the particles by dt (v^n + v*)/2, so
 //      the corrected positions are the thesis' x^{n+1} = x^n + dt (v^n + v^{n+1})/2.
+//   4. (solver.divergence_cleaning) the exact projection of the corrected velocities u onto
+//      the discretely divergence-free fields: with D the continuity divergence above, restricted
+//      to the unknowns and linear in the fluid velocities (walls keep theirs),
+//          u <- u - dt G_a phi,   V_i (D G_a phi)_i = V_i (D u)_i / dt,
+//          (G_a phi)_k = sum_j m_j (phi_k / rho_k^2 + phi_j / rho_j^2) grad_k W_kj,
+//      phi = 0 on free-surface and wall particles. G_a = -M^-1 D^T V (M = diag m, V = diag m/rho)
+//      is the adjoint of D, so V D G_a is symmetric negative semi-definite: the kinetic-energy
+//      orthogonal projection, which only removes energy. Its null space (checkerboards) does
+//      not move u; a relative diagonal shift of 1e-10 makes the matrix definite for UMFPACK/KLU.
+//      phi is a multiplier, not a pressure: the stored pressure stays that of step 2.
+//      Positions are corrected with the same -dt^2/2 G_a phi.
 // Without free-surface detection (closed or periodic domains) the pressure is fixed by
 // p = 0 at one fluid particle (the first), which makes the Neumann problem non-singular; the
 // mean of the right-hand side is removed first (solvability of the Neumann problem).
@@ -92,27 +104,44 @@ class Projection final : public StepHook<D> {
   // after the last projection (the "after" value at the corrected positions).
   double divergenceBefore() const { return last_.divergence_before; }
   double divergenceAfter() const { return last_.divergence_after; }
+  // With divergence cleaning: after the pressure projection, before the cleaning.
+  double divergenceProjected() const { return last_.divergence_projected; }
+  const SolveReport& lastCleaning() const { return last_.cleaning; }
   const SolveReport& lastSolve() const { return last_.solve; }
   std::size_t unknowns() const { return n_unknowns_; }
 
  private:
   struct LastProjection {
-    SolveReport solve;
+    SolveReport solve, cleaning;
     double assembly_seconds = 0, solve_seconds = 0, divergence_before = 0, divergence_after = 0;
+    double divergence_projected = 0, cleaning_seconds = 0;
   };
   void flagFreeSurface(SphSystem<D>& sys, double t);
   void numberUnknowns(const SphSystem<D>& sys);
   void wallExtrapolation(const SphSystem<D>& sys);
-  void gradientRows(SphSystem<D>& sys);
-  void assemble(SphSystem<D>& sys, double dt);
+  enum class Gradient { renormalised, difference, symmetric };
+  enum class Laplacian { consistent, morris, exact };
+  void gradientRows(SphSystem<D>& sys, Gradient form, bool walls_enter);
+  void assemble(SphSystem<D>& sys, double dt, Laplacian op, bool incremental);
+  Laplacian operator_() const { return consistent_ ? Laplacian::consistent : Laplacian::morris; }
+  void clean(SphSystem<D>& sys, double t, double dt, double* y);
   double divergence(SphSystem<D>& sys, const Vec<D>& wall_shift);
-  void correct(SphSystem<D>& sys, double dt, double* y);
+  void correct(SphSystem<D>& sys, double dt, double* y, bool cleaning);
+  void correctPositions(SphSystem<D>& sys, double dt, double* y);
   void storePressure(const SphSystem<D>& sys);
 
-  enum class Gradient { renormalised, difference, symmetric };
   LinearSolverOptions options_;
   Gradient gradient_ = Gradient::renormalised;
-  bool consistent_ = true, incremental_ = false;
+  bool consistent_ = true, incremental_ = false, cleaning_ = false;
+  LinearSolverOptions cleaning_options_;
+  std::unique_ptr<LinearSolver> cleaning_solver_;
+  std::vector<double> multiplier_;
+  SparseRowMatrix cleaning_matrix_;
+  std::vector<int> cleaning_outer_, cleaning_inner_;
+  Eigen::VectorXd cleaning_solution_;
+  std::uint64_t cleaning_iterations_total_ = 0;
+  int cleaning_iterations_max_ = 0;
+  double cleaning_residual_max_ = 0, cleaning_seconds_ = 0;
   std::vector<double> previous_pressure_;
   std::unique_ptr<LinearSolver> solver_;
   Effect<D>* free_surface_effect_ = nullptr;
@@ -146,6 +175,7 @@ class Projection final : public StepHook<D> {
   SparseRowMatrix matrix_;
   Eigen::VectorXd rhs_, solution_;
   std::vector<double> divergence_;  // per moving particle: div v*
+  std::vector<double> correction_;  // per moving particle: the velocity correction / dt
 
   LastProjection last_;
   std::uint64_t solves_ = 0, iterations_total_ = 0;
