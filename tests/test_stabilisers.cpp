@@ -853,3 +853,72 @@ TEST_CASE("density diffusion: wall neighbours skipped by default, included on re
     CHECK_THROWS_AS(makeEffects<2>(eff), InputError);
   }
 }
+
+TEST_CASE("image walls (Fang et al. 2006 eqs. 46-48): boundary and image values for linear fields") {
+  // The Oldroyd-B channel with Fang's boundary + image particles on both walls (the fluid one
+  // spacing off the surfaces, Fang Fig. 1), a linear shear v_x = gamma y, a linear pressure
+  // and a stress with a constant and a linear part set in the fluid; one right-hand side.
+  const double dx = 2.5e-5, H = 1e-3, gamma = 10.0;
+  for (const char* mode : {"fang", "centroid"}) {
+    CAPTURE(mode);
+    SceneHeader h;
+    const std::string ex = std::string("\"") + mode + "\"";
+    Config cfg = loadScene(VESPH_SOURCE_DIR "/cases/startup_channel_oldroyd_b.toml",
+                           {"blocks[0].min=[0.0, 1.25e-5]", "blocks[0].max=[5.0e-4, 0.9875e-3]",
+                            "blocks[1].treatment=\"image\"", "blocks[1].normal=[0.0, 1.0]",
+                            "blocks[1].extrapolation=" + ex, "blocks[2].treatment=\"image\"",
+                            "blocks[2].normal=[0.0, -1.0]", "blocks[2].extrapolation=" + ex},
+                           h);
+    Simulation<2> sim(cfg, h);
+    SphSystem<2>& sys = sim.system();
+    ParticleSet<2>& P = sys.particles;
+    const std::size_t n = P.n_moving;
+    // Rows: fluid at dx .. H - dx (39), walls at 0, -dx, ..., -5 dx and H, ..., H + 5 dx.
+    CHECK(n == 20 * 39);
+    CHECK(P.size() - n == 2 * 20 * 6);
+    std::vector<double> y = sim.state(), ydot(y.size());
+    Field* S = P.fields.find("elastic_stress");
+    REQUIRE(S != nullptr);
+    for (std::size_t i = 0; i < n; ++i) {
+      const double yi = P.position[2 * i + 1];
+      y[3 * n + 2 * i] = gamma * yi;  // v_x
+      y[3 * n + 2 * i + 1] = 0.0;
+    }
+    // The stress is part of the state after the velocities: S_xx = 2 + y/H, S_xy = 1, S_yy = 3 (Pa).
+    const std::size_t s0 = 5 * n;
+    REQUIRE(y.size() >= s0 + 3 * n);
+    for (std::size_t i = 0; i < n; ++i) {
+      const double yi = P.position[2 * i + 1];
+      y[s0 + 3 * i] = 2.0 + yi / H;
+      y[s0 + 3 * i + 1] = 1.0;
+      y[s0 + 3 * i + 2] = 3.0;
+    }
+    sys.evaluate(0.0, y.data(), ydot.data());
+    const Field* wv = P.fields.find("wall_velocity");
+    REQUIRE(wv != nullptr);
+    double worst_boundary_v = 0, worst_image_v = 0, worst_nn = 0, worst_sxy = 0;
+    for (std::size_t w = n; w < P.size(); ++w) {
+      const double yw = P.position[2 * w + 1];
+      const bool lower = yw < 0.5 * H;
+      const double depth = lower ? -yw : yw - H;  // behind the surface
+      const double vx = wv->data[2 * (w - n)];
+      // v_x = gamma y vanishes on the floor only: the floor's image particles must carry its
+      // continuation -gamma depth (eq. 47 through u_w = 0); the ceiling is not checked.
+      if (!lower) continue;
+      if (depth < 1e-12) {
+        worst_boundary_v = std::max(worst_boundary_v, std::abs(vx));
+        worst_nn = std::max(worst_nn, std::abs(S->data[3 * w + 2]));  // n.S.n = S_yy on the floor
+        worst_sxy = std::max(worst_sxy, std::abs(S->data[3 * w + 1] - 1.0));
+      } else {
+        worst_image_v = std::max(worst_image_v, std::abs(vx - (-gamma * depth)) / (gamma * dx));
+      }
+    }
+    CHECK(worst_boundary_v == 0.0);
+    CHECK(worst_nn == 0.0);          // Fang: the normal stress component is zero on the wall
+    CHECK(worst_sxy < 1e-12);        // the other components interpolated (constant: exact)
+    if (std::string(mode) == "centroid")
+      CHECK(worst_image_v < 1e-9);   // linear through the wall value: exact
+    else
+      CHECK(worst_image_v > 0.05);   // eq. 47 with the literal d_P: the interpolation bias
+  }
+}

@@ -34,6 +34,8 @@ attribute ``scene``:
     F    = effects.body_force.acceleration[0]     [m/s^2]
     y0   = min over [[blocks]] with kind "fluid" of min[1]        [m]
     H    = max over those blocks of max[1]  -  y0                  [m]
+    (walls with treatment = "image": y0 and y0 + H are their surfaces, the rows of
+    boundary particles: the floor's max[1] and the ceiling's min[1])
 The analytic start-up velocity (fluid at rest at t = 0, no-slip walls at
 y = y0 and y = y0 + H) is
 
@@ -158,6 +160,19 @@ def scene_parameters(scene):
         raise ValueError("scene has no [[blocks]] with kind = \"fluid\"")
     y0 = min(float(b["min"][1]) for b in fluid_blocks)
     H = max(float(b["max"][1]) for b in fluid_blocks) - y0
+    # Image walls (Fang et al. 2006 §3.3): the wall surfaces are their boundary particles'
+    # rows, one spacing from the fluid (the fluid block's edges are half a spacing off).
+    images = [b for b in scene.get("blocks", [])
+              if b.get("kind") == "wall" and b.get("treatment") == "image"]
+    if images:
+        floors = [float(b["max"][1]) for b in images if float(b["normal"][1]) > 0]
+        ceilings = [float(b["min"][1]) for b in images if float(b["normal"][1]) < 0]
+        if floors:
+            y0_new = max(floors)
+            H += y0 - y0_new
+            y0 = y0_new
+        if ceilings:
+            H = min(ceilings) - y0
     if H <= 0:
         raise ValueError(f"fluid blocks have non-positive height H = {H}")
     if rho <= 0 or mu <= 0:

@@ -9,7 +9,26 @@ void DummyWalls<D>::setup(Setup<D>& s) {
   if (model_) pressure_ = &s.particles.fields.require("pressure", 1);
   g_ = s.body_acceleration;
   rho0_ = s.rest_density;
+  dx_ = s.spacing;
+  const std::size_t n0 = s.particles.n_moving;
+  if (!points_.empty() && points_.size() != s.particles.size() - n0)
+    throw std::logic_error("wall treatment given for a different number of fixed particles");
+  for (std::size_t k = 0; k < points_.size(); ++k)
+    if (points_[k].image) {
+      any_image_ = true;
+      if (points_[k].depth > 0) images_.push_back(static_cast<Index>(n0 + k));
+    }
 }
+
+namespace {
+// The index of the diagonal component (a, a) in the packed symmetric storage of
+// include/vesph/physics/constitutive.hpp: 2D xx, xy, yy; 3D xx, xy, xz, yy, yz, zz.
+template <int D>
+int diagonalComponent(int a) {
+  if constexpr (D == 2) return a == 0 ? 0 : 2;
+  else return a == 0 ? 0 : a == 1 ? 3 : 5;
+}
+}  // namespace
 
 template <int D>
 void DummyWalls<D>::update(const RhsContext<D>& ctx, const NeighbourList<D>& list,
@@ -28,8 +47,50 @@ void DummyWalls<D>::update(const RhsContext<D>& ctx, const NeighbourList<D>& lis
         interpolated_.push_back(f.get());
       }
     interpolated_ready_ = true;
+    for (const Field* f : interpolated_)
+      if (any_image_ && (interpolated_.size() > 8 || f->components > 8))
+        throw std::logic_error("image walls interpolate at most 8 fields of at most 8 components");
+    // Fang: "the normal component of the elastic stress ... is set to zero" on the boundary
+    // particles: the stress tensors (D (D + 1) / 2 components).
+    for (Field* f : interpolated_)
+      normal_component_.push_back(
+          (f->name == "elastic_stress" || f->name == "extra_stress") && f->components == (D == 2 ? 3 : 6) ? 1 : -1);
   }
   driver.runFixed(ctx, list, [&](Index w, std::span<const Neighbour<D>> fluid) {
+    if (any_image_ && points_[w - n0].image) {
+      if (points_[w - n0].depth > 0) return;  // image particles: after the boundary particles
+      // Boundary particle on the wall surface: Fang eq. (46) for the pressure and the
+      // stresses, n.S.n = 0, the wall's own velocity, rho0.
+      const Vec<D>& nrm = points_[w - n0].normal;
+      int axis = 0;
+      for (int a = 0; a < D; ++a)
+        if (nrm[a] != 0.0) axis = a;
+      double vol_w = 0, sum_p = 0;
+      for (const Neighbour<D>& nb : fluid) {
+        const double vw = p.mass[nb.j] / p.density[nb.j] * nb.W;
+        vol_w += vw;
+        if (pres) sum_p += vw * pres[nb.j];
+      }
+      for (std::size_t q = 0; q < interpolated_.size(); ++q) {
+        Field& f = *interpolated_[q];
+        const int nc = f.components;
+        double* out = f.data.data() + static_cast<std::size_t>(nc) * w;
+        for (int c = 0; c < nc; ++c) out[c] = 0.0;
+        for (const Neighbour<D>& nb : fluid) {
+          const double vw = p.mass[nb.j] / p.density[nb.j] * nb.W;
+          const double* src = f.data.data() + static_cast<std::size_t>(nc) * nb.j;
+          for (int c = 0; c < nc; ++c) out[c] += vw * src[c];
+        }
+        if (vol_w > 0)
+          for (int c = 0; c < nc; ++c) out[c] /= vol_w;
+        if (normal_component_[q] > 0) out[diagonalComponent<D>(axis)] = 0.0;
+      }
+      double* out_v = wv + D * (w - n0);
+      for (int a = 0; a < D; ++a) out_v[a] = p.velocity[D * w + a];
+      p.density[w] = rho0_;
+      if (pres) pres[w] = vol_w > 0 ? sum_p / vol_w : model_->pressure(rho0_);
+      return;
+    }
     double sumW = 0, sum_p = 0, sum_rho_gr = 0;
     Vec<D> sum_v = Vec<D>::Zero();
     for (const Neighbour<D>& nb : fluid) {
@@ -69,6 +130,70 @@ void DummyWalls<D>::update(const RhsContext<D>& ctx, const NeighbourList<D>& lis
       }
     }
   });
+  if (images_.empty()) return;
+#pragma omp parallel for schedule(static) if (images_.size() >= kParallelMinimum)
+  for (std::size_t k = 0; k < images_.size(); ++k) imageParticle(ctx, list, images_[k]);
+}
+
+template <int D>
+void DummyWalls<D>::imageParticle(const RhsContext<D>& ctx, const NeighbourList<D>& list, Index w) {
+  // Fang eqs. (46)-(48): values at P = r_B + d_P n by (46), extrapolated through the wall
+  // value (boundary particle B) to the image particle's depth d_I.
+  ParticleSet<D>& p = ctx.particles;
+  const std::size_t n0 = p.n_moving;
+  const WallPoint<D>& wp = points_[w - n0];
+  const Index b = wp.boundary;
+  const double d_p = dx_;
+  Vec<D> xp;
+  for (int a = 0; a < D; ++a) xp[a] = p.position[D * b + a] + d_p * wp.normal[a];
+  double vol_w = 0, sum_p = 0;
+  Vec<D> sum_v = Vec<D>::Zero(), sum_r = Vec<D>::Zero();
+  constexpr int kMaxComponents = 8;
+  double sum_f[8][kMaxComponents] = {};
+  const double* pres = pressure_ ? pressure_->data.data() : nullptr;
+  const std::size_t nf = interpolated_.size();  // <= 8, checked at the first update
+  list.forMovingNear(p, xp, [&](Index j, const Vec<D>& r) {
+    const double vw = p.mass[j] / p.density[j] * ctx.kernel.W(r.norm());
+    vol_w += vw;
+    sum_v += vw * p.v(j);
+    sum_r -= vw * r;  // r = x_P - x_j
+    if (pres) sum_p += vw * pres[j];
+    for (std::size_t q = 0; q < nf; ++q) {
+      const Field& f = *interpolated_[q];
+      const double* src = f.data.data() + static_cast<std::size_t>(f.components) * j;
+      for (int c = 0; c < f.components && c < kMaxComponents; ++c) sum_f[q][c] += vw * src[c];
+    }
+  });
+  double* out_v = wall_velocity_->data.data() + D * (w - n0);
+  p.density[w] = rho0_;
+  if (vol_w <= 0) {  // no fluid near P: the wall values
+    for (int a = 0; a < D; ++a) out_v[a] = p.velocity[D * b + a];
+    if (pres) pressure_->data[w] = pres[b];
+    for (std::size_t q = 0; q < interpolated_.size(); ++q) {
+      Field& f = *interpolated_[q];
+      for (int c = 0; c < f.components; ++c) f.data[f.components * w + c] = f.data[f.components * b + c];
+    }
+    return;
+  }
+  const double inv = 1.0 / vol_w;
+  // The interpolation (46) at P over a support cut by the wall is the value at the centroid
+  // of its weights, not at P: the extrapolation uses that centroid's distance from the wall
+  // (first-order consistent; with d_P itself a linear profile's wall slope is off by the bias).
+  const double d_c = wp.centroid ? d_p + (sum_r * inv).dot(wp.normal) : d_p;
+  const double factor = 1.0 + wp.depth / std::max(d_c, 0.25 * d_p);
+  for (int a = 0; a < D; ++a) {
+    const double vp = sum_v[a] * inv;
+    out_v[a] = vp + factor * (p.velocity[D * b + a] - vp);  // eq. (47), u_w the wall's velocity
+  }
+  if (pres) pressure_->data[w] = sum_p * inv + factor * (pres[b] - sum_p * inv);
+  for (std::size_t q = 0; q < nf; ++q) {  // eq. (48)
+    Field& f = *interpolated_[q];
+    const int nc = f.components;
+    for (int c = 0; c < nc && c < kMaxComponents; ++c) {
+      const double fp = sum_f[q][c] * inv;
+      f.data[static_cast<std::size_t>(nc) * w + c] = fp + factor * (f.data[static_cast<std::size_t>(nc) * b + c] - fp);
+    }
+  }
 }
 
 template class DummyWalls<2>;

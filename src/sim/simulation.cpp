@@ -84,13 +84,17 @@ Simulation<D>::Simulation(Config& config, const SceneHeader& header) : config_(c
   system_.effects = makeEffects<D>(effects);
   if (system_.effects.empty())
     effects.fail("continuity", "at least one effect, e.g. [effects.continuity]");
-  if (system_.particles.nFixed() > 0) system_.boundaries.push_back(std::make_unique<DummyWalls<D>>());
+  if (system_.particles.nFixed() > 0) system_.boundaries.push_back(std::make_unique<DummyWalls<D>>(wall_points_));
 
   // Pressure scheme: weakly compressible (the pressure from an equation of state, an effect)
   // or incompressible (the projection after every step, src/isph).
   ConfigTable solver = root.table("solver");
   scheme_ = solver.choice("scheme", "wcsph", {"wcsph", "isph"});
   if (scheme_ == "isph") {
+    for (const WallPoint<D>& w : wall_points_)
+      if (w.image)
+        throw InputError(config_.file() + ": blocks: treatment = \"image\" walls are not implemented with solver.scheme = "
+                         "\"isph\" (the projection extrapolates the wall pressure as for dummy layers); use treatment = \"dummy\"");
     system_.hooks.push_back(makeProjection<D>(solver));
   } else {
     for (const std::string& key : solver.keys())
@@ -163,6 +167,10 @@ void Simulation<D>::generateParticles(ConfigTable& root) {
     Vec<D> velocity = Vec<D>::Zero();
     double jitter = 0;       // fluid: random displacement of each particle, fraction of dx
     std::uint64_t seed = 1;  // of the jitter's random sequence (reproducible)
+    bool image = false;      // wall: Fang et al. (2006) §3.3 boundary + image particles
+    int normal_axis = 0;     // image wall: its surface faces +-e_axis (into the fluid)
+    double normal_sign = 1;
+    bool centroid = false;   // image wall: extrapolate from the centroid of P's weights
   };
   const Vec<D> v0 = root.table("initial").vector<D>("velocity", Vec<D>::Zero(), "m/s");
   std::vector<Box> boxes;
@@ -198,6 +206,25 @@ void Simulation<D>::generateParticles(ConfigTable& root) {
     }
     box.lo = b.vector<D>("min", std::nullopt, "m");
     box.hi = b.vector<D>("max", std::nullopt, "m");
+    if (kind == "wall") {
+      // Per wall: vesph's dummy layers (Adami et al. 2012) or Fang's boundary particles on the
+      // wall surface plus image particles behind it (include/vesph/boundary/dummy_walls.hpp).
+      box.image = b.choice("treatment", "dummy", {"dummy", "image"}) == "image";
+      if (box.image) {
+        const Vec<D> nrm = b.vector<D>("normal", std::nullopt);
+        int axis = -1, nonzero = 0;
+        for (int a = 0; a < D; ++a)
+          if (nrm[a] != 0.0) {
+            ++nonzero;
+            axis = a;
+          }
+        if (nonzero != 1 || std::abs(std::abs(nrm[axis]) - 1.0) > 1e-12)
+          b.fail("normal", "a coordinate unit vector pointing from the wall into the fluid, e.g. [0.0, 1.0] for a floor");
+        box.normal_axis = axis;
+        box.normal_sign = nrm[axis] > 0 ? 1.0 : -1.0;
+        box.centroid = b.choice("extrapolation", "fang", {"fang", "centroid"}) == "centroid";
+      }
+    }
     for (int a = 0; a < D; ++a) {
       const double L = box.hi[a] - box.lo[a];
       if (!(L > 0)) b.fail("max", "a corner above min along every axis");
@@ -276,14 +303,41 @@ void Simulation<D>::generateParticles(ConfigTable& root) {
       long total = 1;
       for (int a = 0; a < D; ++a) {
         n[a] = std::lround((b.hi[a] - b.lo[a]) / dx_);
+        // An image wall: one row on the surface (the boundary particles) and one row per
+        // spacing of the block's depth behind it (the image particles), Fang et al. Fig. 1.
+        if (b.image && a == b.normal_axis) ++n[a];
         total *= n[a];
       }
+      const std::size_t first = p.size();
       for (long k = 0; k < total; ++k) {
         long rem = k;
         Vec<D> x;
+        std::array<long, D> idx;
         for (int a = 0; a < D; ++a) {
-          x[a] = b.lo[a] + (static_cast<double>(rem % n[a]) + 0.5) * dx_;
+          idx[a] = rem % n[a];
+          x[a] = b.lo[a] + (static_cast<double>(idx[a]) + 0.5) * dx_;
           rem /= n[a];
+        }
+        if (b.image) {
+          const int a = b.normal_axis;
+          const double surface = b.normal_sign > 0 ? b.hi[a] : b.lo[a];
+          x[a] = surface - b.normal_sign * static_cast<double>(idx[a]) * dx_;
+          WallPoint<D> w;
+          w.image = true;
+          w.normal = Vec<D>::Zero();
+          w.normal[a] = b.normal_sign;
+          w.depth = static_cast<double>(idx[a]) * dx_;
+          w.centroid = b.centroid;
+          // The boundary particle of the same column: row 0 (idx[a] = 0), same other indices.
+          long kb = 0, stride = 1;
+          for (int c = 0; c < D; ++c) {
+            kb += stride * (c == a ? 0 : idx[c]);
+            stride *= n[c];
+          }
+          w.boundary = static_cast<Index>(first + static_cast<std::size_t>(kb));
+          wall_points_.push_back(w);
+        } else if (pass == ParticleKind::wall) {
+          wall_points_.push_back(WallPoint<D>{});
         }
         p.add(Vec<D>(x + jitter(b)), b.velocity, rho0_, mass, pass, next_id++);
       }

@@ -11,6 +11,7 @@
 // Layout (compressed rows): for particle i, nbr[start[i] .. split[i]) are moving
 // neighbours and nbr[split[i] .. start[i+1]) fixed ones. Fixed particles list only their
 // moving neighbours (fixed-fixed pairs are never needed).
+#include <array>
 #include <cstddef>
 #include <vector>
 
@@ -35,6 +36,44 @@ class NeighbourList {
   std::size_t builds() const { return builds_; }
   std::size_t maxCount() const { return max_count_; }
   std::size_t entries() const { return nbr.size(); }
+
+  // fn(j) for every moving particle j closer than the cutoff to the point x, at the current
+  // positions (for values at points that are not particles: Fang's image-wall points). Exact
+  // between rebuilds: a particle within the cutoff now was within cutoff + skin/2 at the
+  // build, so it is binned in one of the 3^D cells around x (cells are >= cutoff + skin wide).
+  template <class Fn>
+  void forMovingNear(const ParticleSet<D>& p, const Vec<D>& x, Fn&& fn) const {
+    std::array<int, D> ci;
+    for (int a = 0; a < D; ++a) ci[a] = cellCoord(a, x[a]);
+    const double cut2 = cutoff_ * cutoff_;
+    constexpr int noffsets = D == 2 ? 9 : 27;
+    for (int o = 0; o < noffsets; ++o) {
+      int rem = o;
+      std::size_t cell = 0, stride = 1;
+      bool skip = false;
+      for (int a = 0; a < D; ++a) {
+        int cc = ci[a] + (rem % 3) - 1;
+        rem /= 3;
+        if (cc < 0 || cc >= ncell_[a]) {
+          if (!domain_.periodic[a]) {
+            skip = true;
+            break;
+          }
+          cc = (cc + ncell_[a]) % ncell_[a];
+        }
+        cell += stride * static_cast<std::size_t>(cc);
+        stride *= static_cast<std::size_t>(ncell_[a]);
+      }
+      if (skip) continue;
+      for (std::size_t k = cell_start_[cell]; k < cell_start_[cell + 1]; ++k) {
+        const Index j = cell_items_[k];
+        if (j >= p.n_moving) continue;
+        Vec<D> r;
+        for (int a = 0; a < D; ++a) r[a] = domain_.image(a, x[a] - p.position[D * j + a]);
+        if (r.squaredNorm() < cut2) fn(j, r);
+      }
+    }
+  }
 
   std::vector<std::size_t> start;  // [N+1]
   std::vector<std::size_t> split;  // [N]

@@ -12,6 +12,7 @@
 
 #include "vesph/io/config.hpp"
 #include "vesph/io/output.hpp"
+#include "vesph/boundary/dummy_walls.hpp"
 #include "vesph/sim/system.hpp"
 
 namespace vesph {
@@ -65,6 +66,7 @@ class Simulation {
  private:
   void generateParticles(ConfigTable& root);
   void markWallLayers();
+  std::vector<WallPoint<D>> wall_points_;  // per fixed particle: its wall treatment
   DiagnosticsRow diagnostics(double t, double dt, const double* y) const;
   std::string checkState(const DiagnosticsRow& row, const double* y) const;
   std::vector<std::string> hookColumns() const;
