@@ -6,6 +6,7 @@ Usage
 -----
     /usr/bin/python3 tools/drop_measure.py H5FILE [H5FILE ...] [--compare H5FILE ...]
         [--out-dir DIR] [--prefix NAME] [--no-png] [--link 1.5] [--min-cluster 2]
+        [--min-fragment 0.01]
         [--contact 1.5] [--wall-y Y] [--until T]
         [--max-volume-error E] [--no-fracture | --expect-fracture] [--max-gap 2.5]
         [--crack-radius 3] [--max-crack 0.05] [--max-nn-gap G]
@@ -54,7 +55,10 @@ Per frame (fluid particles, kind 0)
   between particle columns up to about 2 R wide); their area (3D: volume) / the first
   frame's volume is the crack fraction. A smooth surface adds almost nothing; the staircase
   of a lattice disk gives about 0.5 % (D = 100 dx) to 2 % (D = 20 dx).
-- fractured (a frame): clusters >= 2, or void gap > --max-gap (default 2.5), or crack
+- fragments: clusters of at least --min-fragment (default 0.01) of the fluid particles. A
+  smaller cluster is a droplet: a few particles flung off the rim (counted in clusters) do
+  not make the drop fractured; the drop breaking into pieces does.
+- fractured (a frame): fragments >= 2, or void gap > --max-gap (default 2.5), or crack
   fraction > --max-crack (default 0.05), or (only when given) max NN gap > --max-nn-gap.
   Detached particles alone do not make a fracture.
 
@@ -200,8 +204,9 @@ class Drop:
 
 
 # -------------------------------------------------------------------------- measures
-def clusters(pos, link_dist, min_cluster):
-    """(number of clusters of >= min_cluster particles, detached particles, largest size)."""
+def clusters(pos, link_dist, min_cluster, min_fragment=0.0):
+    """(number of clusters of >= min_cluster particles, detached particles, largest size,
+    fragments: clusters of at least min_fragment of all particles and >= min_cluster)."""
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
     from scipy.spatial import cKDTree
@@ -213,7 +218,8 @@ def clusters(pos, link_dist, min_cluster):
     _, labels = connected_components(a, directed=False)
     sizes = np.bincount(labels)
     big = sizes >= min_cluster
-    return int(np.count_nonzero(big)), int(sizes[~big].sum()), int(sizes.max())
+    fragment = big & (sizes >= min_fragment * n)
+    return int(np.count_nonzero(big)), int(sizes[~big].sum()), int(sizes.max()), int(np.count_nonzero(fragment))
 
 
 def max_nn_gap(pos):
@@ -315,14 +321,14 @@ def measure(drop, a):
         near = h <= a.contact * dx
         nc = int(np.count_nonzero(near))
         cw = float(x[near].max() - x[near].min()) if nc >= 2 else 0.0
-        ncl, ndet, big = clusters(pos, a.link * dx, a.min_cluster)
+        ncl, ndet, big, nfrag = clusters(pos, a.link * dx, a.min_cluster, a.min_fragment)
         nn = max_nn_gap(pos) / dx
         gm = grid_measures(pos, dx, a.link, a.crack_radius)
         vg = gm["void_gap"] / dx
         cf = gm["crack_area"] / vol_first
         width = float(x.max() - x.min())
         height = float(y.max() - drop.wall_y)
-        frac = (ncl >= 2 or vg > a.max_gap or cf > a.max_crack
+        frac = (nfrag >= 2 or vg > a.max_gap or cf > a.max_crack
                 or (a.max_nn_gap is not None and nn > a.max_nn_gap))
         rows.append({
             "frame": nm, "time_s": t, "tV_D": tvd,
@@ -331,7 +337,7 @@ def measure(drop, a):
             "height_m": height, "height_D": height / D,
             "volume": vol, "volume_rel_err_first": vol / vol_first - 1.0,
             "volume_rel_err_disk": vol / drop.area0 - 1.0,
-            "n_fluid": len(x), "clusters": ncl, "detached": ndet,
+            "n_fluid": len(x), "clusters": ncl, "fragments": nfrag, "detached": ndet,
             "largest_cluster_fraction": big / len(x),
             "max_nn_gap_dx": nn, "void_gap_dx": vg,
             "void_fraction": gm["void_area"] / vol_first, "crack_fraction": cf,
@@ -347,7 +353,7 @@ COLUMNS = [  # (key, csv header; {vol} is replaced by volume_m2 / volume_m3)
     ("n_contact", "n_contact"), ("height_m", "height_m"), ("height_D", "height_over_D"),
     ("volume", "{vol}"), ("volume_rel_err_first", "volume_rel_err_first"),
     ("volume_rel_err_disk", "volume_rel_err_disk"), ("n_fluid", "n_fluid"),
-    ("clusters", "clusters"), ("detached", "detached"),
+    ("clusters", "clusters"), ("fragments", "fragments"), ("detached", "detached"),
     ("largest_cluster_fraction", "largest_cluster_fraction"),
     ("max_nn_gap_dx", "max_nn_gap_over_dx"), ("void_gap_dx", "void_gap_over_dx"),
     ("void_fraction", "void_fraction"), ("crack_fraction", "crack_fraction"),
@@ -472,8 +478,8 @@ def summarize(drop, rows, a, p):
 def why_fractured(r, a):
     """The criteria a fractured row meets, as text."""
     why = []
-    if r["clusters"] >= 2:
-        why.append(f"{r['clusters']} clusters")
+    if r["fragments"] >= 2:
+        why.append(f"{r['fragments']} fragments")
     if r["void_gap_dx"] > a.max_gap:
         why.append(f"void gap {r['void_gap_dx']:.3g} dx")
     if r["crack_fraction"] > a.max_crack:
@@ -500,7 +506,7 @@ def checks(drop, rows, a, p):
           f"{worst['tV_D']:.4g} (limit {100 * a.max_volume_error:g} %): "
           + ("PASS" if good else "FAIL"))
     frac = [r for r in rows if r["fractured"]]
-    crit = (f"clusters >= 2 or void gap > {a.max_gap:g} dx or crack fraction > "
+    crit = (f"fragments (>= {100 * a.min_fragment:g} % of the particles) >= 2 or void gap > {a.max_gap:g} dx or crack fraction > "
             f"{100 * a.max_crack:g} %") + (
         f" or NN gap > {a.max_nn_gap:g} dx" if a.max_nn_gap is not None else "")
     if a.no_fracture:
@@ -607,6 +613,9 @@ def main(argv=None):
                     help="particles closer than L dx are linked into a cluster (default 1.5)")
     ap.add_argument("--min-cluster", type=int, default=2, metavar="N",
                     help="smaller components are 'detached' particles (default 2)")
+    ap.add_argument("--min-fragment", type=float, default=0.01, metavar="F",
+                    help="clusters of at least this fraction of the fluid particles are "
+                         "fragments; two fragments make a frame fractured (default 0.01)")
     ap.add_argument("--contact", type=float, default=1.5, metavar="C",
                     help="contact width: particles within C dx of the wall (default 1.5)")
     ap.add_argument("--wall-y", type=float, metavar="Y",

@@ -1313,12 +1313,12 @@ def make_drop_tests(tmp):
         h5 = write_drop(os.path.join(d, "split.h5"), [(0.0, disk), (0.01, half)])
         rc, out, err, rows = measure(h5)
         r = rows[1]
-        expect(r["clusters"] == "2" and r["detached"] == "0" and r["fractured"] == "1",
-               f"split frame {r}", out + err)
+        expect(r["clusters"] == "2" and r["fragments"] == "2" and r["detached"] == "0"
+               and r["fractured"] == "1", f"split frame {r}", out + err)
         expect(near(r["largest_cluster_fraction"], 0.5), f"largest {r['largest_cluster_fraction']}")
         expect(rows[0]["clusters"] == "1", "intact frame")
         rc, out, err, _ = measure(h5, "--no-fracture")
-        expect(rc == 1 and "2 clusters" in out and "RESULT: FAIL" in out, f"exit {rc}", out + err)
+        expect(rc == 1 and "2 fragments" in out and "RESULT: FAIL" in out, f"exit {rc}", out + err)
         rc, out, err, _ = measure(h5, "--expect-fracture")
         expect(rc == 0 and "RESULT: PASS" in out, f"exit {rc}", out + err)
         # a link longer than the gap joins the halves again
@@ -1385,8 +1385,13 @@ def make_drop_tests(tmp):
                f"singles: {r1}", out + err)
         expect(near(r1["largest_cluster_fraction"], N / (N + 3)), "largest fraction")
         expect(near(r1["max_nn_gap_over_dx"], 7.0), f"NN gap {r1['max_nn_gap_over_dx']}")
-        expect(r2["clusters"] == "2" and r2["detached"] == "3" and r2["fractured"] == "1",
-               f"the 2-particle drop is a cluster: {r2}")
+        # the 2-particle drop is a cluster, but no fragment (< 1 % of the particles): a
+        # droplet off the rim is no fracture; with --min-fragment 0 every cluster counts
+        expect(r2["clusters"] == "2" and r2["fragments"] == "1" and r2["detached"] == "3"
+               and r2["fractured"] == "0", f"the 2-particle drop is a cluster: {r2}")
+        rc, out, err, rows = measure(h5, "--min-fragment", "0")
+        expect(rows[2]["fragments"] == "2" and rows[2]["fractured"] == "1",
+               f"--min-fragment 0: {rows[2]}", out + err)
         rc, out, err, _ = measure(h5, "--no-fracture", "--until", "0.75")
         expect(rc == 0, f"detached particles alone are no fracture: exit {rc}", out + err)
         rc, out, err, rows = measure(h5, "--min-cluster", "3", "--no-fracture")

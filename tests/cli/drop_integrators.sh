@@ -1,0 +1,39 @@
+# Every drop case under every integrator at its default settings (issue 5): the three cases of
+# Fang et al. (2006) §4 (cases/drop_newtonian.toml, drop_oldroyd_b.toml, drop_ucm.toml) under
+# leapfrog, midpoint, arkode-fixed and arkode, nothing but the integrator type changed. To keep
+# CI short they run at a quarter of the resolution (dx = 0.08 cm, D/dx = 25, about 490
+# particles) to t V/D = 2 (through the impact at 1.5 and the fastest spreading). Each run must
+# finish (status ok), keep the volume within 1 % and not fracture (tools/drop_measure.py), and
+# the four integrators must agree on the spread at t V/D = 2 within 3 % of D.
+# The full-resolution runs are in docs/validation.md §10.
+. "$(dirname "$0")/lib.sh"
+Q="--set particles.spacing=8e-4 --set domain.min=[-0.06,-0.0024] --set blocks[1].min=[-0.05,-0.0024] --set time.end=0.04 --set output.interval=0.005"
+for c in newtonian oldroyd_b ucm; do
+  for integ in leapfrog midpoint arkode-fixed arkode; do
+    # shellcheck disable=SC2086
+    OMP_NUM_THREADS=1 "$VESPH" run "$SRC/cases/drop_$c.toml" -o "$WORK/${c}_$integ" --quiet $Q \
+      --set "integrator.type=\"$integ\"" >"$WORK/${c}_$integ.log" 2>&1 &
+  done
+  wait
+  for integ in leapfrog midpoint arkode-fixed arkode; do
+    r=$WORK/${c}_$integ
+    grep -q '"status": "ok"' "$r/summary.json" 2>/dev/null && pass || fail "$c under $integ did not finish: $(tail -3 "$r.log")"
+    $PY "$SRC/tools/drop_measure.py" "$r/drop_$c.h5" --no-png --no-fracture --max-volume-error 0.01 >"$r/measure.log" 2>&1 && pass ||
+      fail "$c under $integ: $(tail -4 "$r/measure.log")"
+  done
+  $PY - "$WORK" "$c" >"$WORK/${c}_agree.log" 2>&1 <<'PYEOF' && pass || fail "$c: integrators disagree: $(tail -5 "$WORK/${c}_agree.log")"
+import csv, sys
+w, c = sys.argv[1], sys.argv[2]
+widths = {}
+for integ in ("leapfrog", "midpoint", "arkode-fixed", "arkode"):
+    with open(f"{w}/{c}_{integ}/drop_{c}_drop.csv") as f:
+        rows = list(csv.DictReader(f))
+    last = rows[-1]
+    assert abs(float(last["tV_over_D"]) - 2.0) < 1e-6, last["tV_over_D"]
+    widths[integ] = float(last["width_over_D"])
+print(c, widths)
+spread = max(widths.values()) - min(widths.values())
+assert spread < 0.03, f"width/D at t V/D = 2 differs by {spread:.3f} between integrators"
+PYEOF
+done
+finish
