@@ -106,22 +106,7 @@ void NeighbourList<D>::build(const ParticleSet<D>& p) {
       c /= ncell_[a];
     }
     const double* xi = &p.position[D * i];
-    constexpr int noffsets = D == 2 ? 9 : 27;
-    for (int o = 0; o < noffsets; ++o) {
-      int rem = o;
-      std::size_t cell = 0, stride = 1;
-      bool skip = false;
-      for (int a = 0; a < D; ++a) {
-        int cc = ci[a] + (rem % 3) - 1;
-        rem /= 3;
-        if (cc < 0 || cc >= ncell_[a]) {
-          if (!domain_.periodic[a]) { skip = true; break; }
-          cc = (cc + ncell_[a]) % ncell_[a];
-        }
-        cell += stride * static_cast<std::size_t>(cc);
-        stride *= static_cast<std::size_t>(ncell_[a]);
-      }
-      if (skip) continue;
+    forCellsAround(ci, [&](std::size_t cell) {
       for (std::size_t k = cell_start_[cell]; k < cell_start_[cell + 1]; ++k) {
         const Index j = cell_items_[k];
         if (j == i) continue;
@@ -132,7 +117,7 @@ void NeighbourList<D>::build(const ParticleSet<D>& p) {
         }
         if (r2 < reach2) fn(j);
       }
-    }
+    });
   };
 
   // Pass 1: count; pass 2: fill (moving neighbours first, then fixed).

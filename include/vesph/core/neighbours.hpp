@@ -46,6 +46,27 @@ class NeighbourList {
     std::array<int, D> ci;
     for (int a = 0; a < D; ++a) ci[a] = cellCoord(a, x[a]);
     const double cut2 = cutoff_ * cutoff_;
+    forCellsAround(ci, [&](std::size_t cell) {
+      for (std::size_t k = cell_start_[cell]; k < cell_start_[cell + 1]; ++k) {
+        const Index j = cell_items_[k];
+        if (j >= p.n_moving) continue;
+        Vec<D> r;
+        for (int a = 0; a < D; ++a) r[a] = domain_.image(a, x[a] - p.position[D * j + a]);
+        if (r.squaredNorm() < cut2) fn(j, r);
+      }
+    });
+  }
+
+  std::vector<std::size_t> start;  // [N+1]
+  std::vector<std::size_t> split;  // [N]
+  std::vector<Index> nbr;
+
+ private:
+  void build(const ParticleSet<D>& particles);
+  // fn(cell) for the 3^D cells around cell coordinates ci (wrapped on periodic axes, clipped
+  // on the others).
+  template <class Fn>
+  void forCellsAround(const std::array<int, D>& ci, Fn&& fn) const {
     constexpr int noffsets = D == 2 ? 9 : 27;
     for (int o = 0; o < noffsets; ++o) {
       int rem = o;
@@ -64,23 +85,9 @@ class NeighbourList {
         cell += stride * static_cast<std::size_t>(cc);
         stride *= static_cast<std::size_t>(ncell_[a]);
       }
-      if (skip) continue;
-      for (std::size_t k = cell_start_[cell]; k < cell_start_[cell + 1]; ++k) {
-        const Index j = cell_items_[k];
-        if (j >= p.n_moving) continue;
-        Vec<D> r;
-        for (int a = 0; a < D; ++a) r[a] = domain_.image(a, x[a] - p.position[D * j + a]);
-        if (r.squaredNorm() < cut2) fn(j, r);
-      }
+      if (!skip) fn(cell);
     }
   }
-
-  std::vector<std::size_t> start;  // [N+1]
-  std::vector<std::size_t> split;  // [N]
-  std::vector<Index> nbr;
-
- private:
-  void build(const ParticleSet<D>& particles);
   double maxDisplacement(const ParticleSet<D>& particles) const;
   int cellCoord(int a, double x) const;
 
