@@ -123,7 +123,9 @@ int listAll() {
             << "linear solvers (solver.linear_solver, with scheme = \"isph\"):\n";
   for (const auto& s : linearSolverRegistry()) std::printf("  %-20s %s\n", s.name.c_str(), s.summary.c_str());
   std::cout << "boundaries:\n"
-            << "  dummy_walls          [[blocks]] of kind \"wall\": fixed particle layers, no-slip (Adami et al. 2012)\n";
+            << "  dummy_walls          [[blocks]] of kind \"wall\": fixed particle layers, no-slip (Adami et al. 2012)\n"
+            << "  image walls          [[blocks]] of kind \"wall\" with treatment = \"image\": boundary + image particles\n"
+            << "                       (Fang et al. 2006 eqs. 46-48; normal, extrapolation = \"fang\" | \"centroid\")\n";
   return 0;
 }
 

@@ -6,7 +6,7 @@ grep -q "skin = 0.1" "$WORK/out" && pass || fail "check does not print the neigh
 expect 0 "1000 particles \(800 fluid, 200 fixed\)" -- "$VESPH" check "$SCENE"
 expect 0 "viscosity = 0.002" -- "$VESPH" check "$SCENE" --set fluid.viscosity=2e-3
 expect 0 "leapfrog" -- "$VESPH" list
-for word in continuity equation_of_state pressure_gradient viscosity body_force midpoint cubic quintic wendland_c2; do
+for word in continuity equation_of_state pressure_gradient viscosity body_force midpoint cubic quintic wendland_c2 dummy_walls "treatment = \"image\""; do
   grep -q "$word" "$WORK/out" && pass || fail "vesph list does not mention $word"
 done
 expect 2 "subcommand" -- "$VESPH"
