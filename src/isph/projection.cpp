@@ -258,7 +258,7 @@ void Projection<D>::gradientRows(SphSystem<D>& sys, Gradient form, bool walls_en
 }
 
 template <int D>
-void Projection<D>::assemble(SphSystem<D>& sys, double dt, Laplacian op, bool incremental) {
+void Projection<D>::assemble(SphSystem<D>& sys, double dt, Laplacian op, bool incremental, Assembled& out) {
   const ParticleSet<D>& P = sys.particles;
   const NeighbourList<D>& list = sys.neighbours;
   const std::size_t n = P.n_moving, rows = n_unknowns_;
@@ -407,11 +407,12 @@ void Projection<D>::assemble(SphSystem<D>& sys, double dt, Laplacian op, bool in
   // Gather the rows (threads hold consecutive row ranges) into the compressed matrix.
   std::size_t nnz = 0;
   for (int t = 0; t < threads; ++t) nnz += rows_[static_cast<std::size_t>(t)].cols.size();
-  matrix_.resize(static_cast<Eigen::Index>(rows), static_cast<Eigen::Index>(rows));
-  matrix_.resizeNonZeros(static_cast<Eigen::Index>(nnz));
-  int* outer = matrix_.outerIndexPtr();
-  int* inner = matrix_.innerIndexPtr();
-  double* val = matrix_.valuePtr();
+  SparseRowMatrix& matrix = out.matrix;
+  matrix.resize(static_cast<Eigen::Index>(rows), static_cast<Eigen::Index>(rows));
+  matrix.resizeNonZeros(static_cast<Eigen::Index>(nnz));
+  int* outer = matrix.outerIndexPtr();
+  int* inner = matrix.innerIndexPtr();
+  double* val = matrix.valuePtr();
   std::size_t r = 0, e = 0;
   outer[0] = 0;
   for (int t = 0; t < threads; ++t) {
@@ -429,15 +430,15 @@ void Projection<D>::assemble(SphSystem<D>& sys, double dt, Laplacian op, bool in
     // source has no component along them up to round-off, which the solvers cannot reach: a
     // relative shift of the diagonal makes the matrix definite and changes the corrected
     // velocity's divergence by about the shift (docs/theory.md §10).
-    for (std::size_t q = 0; q < rows; ++q) matrix_.coeffRef(static_cast<Eigen::Index>(q), static_cast<Eigen::Index>(q)) *= 1.0 + kExactShift;
+    for (std::size_t q = 0; q < rows; ++q) matrix.coeffRef(static_cast<Eigen::Index>(q), static_cast<Eigen::Index>(q)) *= 1.0 + kExactShift;
   }
-  pattern_changed_ = previous_outer_.size() != rows + 1 || previous_inner_.size() != nnz ||
-                     !std::equal(previous_outer_.begin(), previous_outer_.end(), outer) ||
-                     !std::equal(previous_inner_.begin(), previous_inner_.end(), inner);
-  if (pattern_changed_) {
-    previous_outer_.assign(outer, outer + rows + 1);
-    previous_inner_.assign(inner, inner + nnz);
-    ++pattern_builds_;
+  out.pattern_changed = out.outer.size() != rows + 1 || out.inner.size() != nnz ||
+                        !std::equal(out.outer.begin(), out.outer.end(), outer) ||
+                        !std::equal(out.inner.begin(), out.inner.end(), inner);
+  if (out.pattern_changed) {
+    out.outer.assign(outer, outer + rows + 1);
+    out.inner.assign(inner, inner + nnz);
+    ++out.pattern_builds;
   }
 }
 
@@ -475,19 +476,10 @@ void Projection<D>::clean(SphSystem<D>& sys, double t, double dt, double* y) {
   // eq. 3.18 without wall pressures), the multiplier is not a pressure and is not stored.
   gradientRows(sys, Gradient::symmetric, false);
   // Its own matrix and pattern record, so that the pressure solve keeps its symbolic analysis.
-  std::swap(matrix_, cleaning_matrix_);
-  std::swap(previous_outer_, cleaning_outer_);
-  std::swap(previous_inner_, cleaning_inner_);
-  const std::size_t builds = pattern_builds_;
-  assemble(sys, dt, Laplacian::exact, false);
-  const bool pattern_changed = pattern_changed_;
-  pattern_builds_ = builds;
-  std::swap(matrix_, cleaning_matrix_);
-  std::swap(previous_outer_, cleaning_outer_);
-  std::swap(previous_inner_, cleaning_inner_);
+  assemble(sys, dt, Laplacian::exact, false, cleaning_system_);
   multiplier_.assign(sys.particles.size(), 0.0);
   cleaning_solution_.setZero(static_cast<Eigen::Index>(n_unknowns_));
-  last_.cleaning = n_unknowns_ ? cleaning_solver_->solve(cleaning_matrix_, pattern_changed, rhs_, cleaning_solution_) : SolveReport{true, 0, 0.0, {}};
+  last_.cleaning = n_unknowns_ ? cleaning_solver_->solve(cleaning_system_.matrix, cleaning_system_.pattern_changed, rhs_, cleaning_solution_) : SolveReport{true, 0, 0.0, {}};
   if (!last_.cleaning.ok) {
     std::ostringstream os;
     os << "ISPH divergence cleaning failed at t = " << t << " s (" << n_unknowns_ << " unknowns): " << last_.cleaning.message;
@@ -543,9 +535,9 @@ void Projection<D>::start(SphSystem<D>& sys, double t, double* y) {
   // answer it), since there is no previous pressure whose offsets would cancel them.
   divergence(sys, g_);
   gradientRows(sys, gradient_, true);
-  assemble(sys, 1.0, operator_(), incremental_);
+  assemble(sys, 1.0, operator_(), incremental_, pressure_system_);
   solution_.setZero(static_cast<Eigen::Index>(n_unknowns_));
-  const SolveReport rep = n_unknowns_ ? solver_->solve(matrix_, pattern_changed_, rhs_, solution_) : SolveReport{true, 0, 0.0, {}};
+  const SolveReport rep = n_unknowns_ ? solver_->solve(pressure_system_.matrix, pressure_system_.pattern_changed, rhs_, solution_) : SolveReport{true, 0, 0.0, {}};
   if (!rep.ok) throw NumericalFailure("ISPH initial pressure solve failed: " + rep.message);
   storePressure(sys);
   sys.unpack(y);  // the velocities back
@@ -566,7 +558,7 @@ void Projection<D>::apply(SphSystem<D>& sys, double t, double dt, double* y) {
   last_.divergence_before = divergence(sys, Vec<D>::Zero());
   if (!incremental_) divergence(sys, Vec<D>(dt * g_));
   gradientRows(sys, gradient_, true);
-  assemble(sys, dt, operator_(), incremental_);
+  assemble(sys, dt, operator_(), incremental_, pressure_system_);
   // A closed domain (pinned pressure): the Neumann problem has a solution only when the
   // sources sum to zero; the discrete sources do not quite, and the pin would take the
   // remainder as a point source at one particle. Removing the mean spreads it evenly.
@@ -577,7 +569,7 @@ void Projection<D>::apply(SphSystem<D>& sys, double t, double dt, double* y) {
   double* p = pressure_->data.data();
   solution_.resize(static_cast<Eigen::Index>(n_unknowns_));
   for (std::size_t r = 0; r < n_unknowns_; ++r) solution_[static_cast<Eigen::Index>(r)] = p[particle_of_[r]];
-  last_.solve = n_unknowns_ ? solver_->solve(matrix_, pattern_changed_, rhs_, solution_) : SolveReport{true, 0, 0.0, {}};
+  last_.solve = n_unknowns_ ? solver_->solve(pressure_system_.matrix, pressure_system_.pattern_changed, rhs_, solution_) : SolveReport{true, 0, 0.0, {}};
   const auto t2 = Clock::now();
   if (!last_.solve.ok) {
     std::ostringstream os;
@@ -592,12 +584,11 @@ void Projection<D>::apply(SphSystem<D>& sys, double t, double dt, double* y) {
   // acts on (the position correction that follows moves the operator by O(dt^2)).
   last_.divergence_after = last_.divergence_projected = divergence(sys, Vec<D>::Zero());
   const auto t3 = Clock::now();
-  if (cleaning_) {
-    clean(sys, t, dt, y);
-    last_.divergence_after = divergence(sys, Vec<D>::Zero());
-  }
-  correctPositions(sys, dt, y);
+  if (cleaning_) clean(sys, t, dt, y);
   const auto t4 = Clock::now();
+  if (cleaning_) last_.divergence_after = divergence(sys, Vec<D>::Zero());
+  correctPositions(sys, dt, y);
+  const auto t5 = Clock::now();
 
   last_.assembly_seconds = seconds(t0, t1);
   last_.cleaning_seconds = seconds(t3, t4);
@@ -605,7 +596,7 @@ void Projection<D>::apply(SphSystem<D>& sys, double t, double dt, double* y) {
   last_.solve_seconds = seconds(t1, t2);
   assembly_seconds_ += last_.assembly_seconds;
   solve_seconds_ += last_.solve_seconds;
-  correction_seconds_ += seconds(t2, t3);
+  correction_seconds_ += seconds(t2, t3) + seconds(t4, t5);
   if (cleaning_) {
     cleaning_iterations_total_ += static_cast<std::uint64_t>(last_.cleaning.iterations);
     cleaning_iterations_max_ = std::max(cleaning_iterations_max_, last_.cleaning.iterations);
@@ -649,7 +640,7 @@ void Projection<D>::summarize(nlohmann::json& s) const {
   j["solve_seconds"] = solve_seconds_;
   j["correction_seconds"] = correction_seconds_;
   j["seconds_per_solve"] = solves_ ? solve_seconds_ / static_cast<double>(solves_) : 0.0;
-  j["pattern_builds"] = pattern_builds_;
+  j["pattern_builds"] = pressure_system_.pattern_builds;
   j["max_divergence_ratio"] = divergence_ratio_max_;
   j["pressure_pinned"] = pinned_;
   j["divergence_cleaning"] = cleaning_;

@@ -119,10 +119,18 @@ class Projection final : public StepHook<D> {
   void flagFreeSurface(SphSystem<D>& sys, double t);
   void numberUnknowns(const SphSystem<D>& sys);
   void wallExtrapolation(const SphSystem<D>& sys);
+  // One assembled matrix with the record of its sparsity pattern (the direct solvers keep their
+  // symbolic analysis while it holds): the pressure equation's, and the cleaning's.
+  struct Assembled {
+    SparseRowMatrix matrix;
+    std::vector<int> outer, inner;  // the pattern of the previous assembly
+    std::size_t pattern_builds = 0;
+    bool pattern_changed = true;
+  };
   enum class Gradient { renormalised, difference, symmetric };
   enum class Laplacian { consistent, morris, exact };
   void gradientRows(SphSystem<D>& sys, Gradient form, bool walls_enter);
-  void assemble(SphSystem<D>& sys, double dt, Laplacian op, bool incremental);
+  void assemble(SphSystem<D>& sys, double dt, Laplacian op, bool incremental, Assembled& out);
   Laplacian operator_() const { return consistent_ ? Laplacian::consistent : Laplacian::morris; }
   void clean(SphSystem<D>& sys, double t, double dt, double* y);
   double divergence(SphSystem<D>& sys, const Vec<D>& wall_shift);
@@ -136,8 +144,6 @@ class Projection final : public StepHook<D> {
   LinearSolverOptions cleaning_options_;
   std::unique_ptr<LinearSolver> cleaning_solver_;
   std::vector<double> multiplier_;
-  SparseRowMatrix cleaning_matrix_;
-  std::vector<int> cleaning_outer_, cleaning_inner_;
   Eigen::VectorXd cleaning_solution_;
   std::uint64_t cleaning_iterations_total_ = 0;
   int cleaning_iterations_max_ = 0;
@@ -169,10 +175,7 @@ class Projection final : public StepHook<D> {
     std::vector<double> vals;
   };
   std::vector<RowBuffer> rows_;
-  std::vector<int> previous_outer_, previous_inner_;
-  std::size_t pattern_builds_ = 0;
-  bool pattern_changed_ = true;
-  SparseRowMatrix matrix_;
+  Assembled pressure_system_, cleaning_system_;
   Eigen::VectorXd rhs_, solution_;
   std::vector<double> divergence_;  // per moving particle: div v*
   std::vector<double> correction_;  // per moving particle: the velocity correction / dt
