@@ -53,8 +53,7 @@ void DummyWalls<D>::update(const RhsContext<D>& ctx, const NeighbourList<D>& lis
     // Fang: "the normal component of the elastic stress ... is set to zero" on the boundary
     // particles: the stress tensors (D (D + 1) / 2 components).
     for (Field* f : interpolated_)
-      normal_component_.push_back(
-          (f->name == "elastic_stress" || f->name == "extra_stress") && f->components == (D == 2 ? 3 : 6) ? 1 : -1);
+      is_stress_.push_back((f->name == "elastic_stress" || f->name == "extra_stress") && f->components == (D == 2 ? 3 : 6));
   }
   driver.runFixed(ctx, list, [&](Index w, std::span<const Neighbour<D>> fluid) {
     if (any_image_ && points_[w - n0].image) {
@@ -65,26 +64,13 @@ void DummyWalls<D>::update(const RhsContext<D>& ctx, const NeighbourList<D>& lis
       int axis = 0;
       for (int a = 0; a < D; ++a)
         if (nrm[a] != 0.0) axis = a;
-      double vol_w = 0, sum_p = 0;
-      for (const Neighbour<D>& nb : fluid) {
-        const double vw = p.mass[nb.j] / p.density[nb.j] * nb.W;
-        vol_w += vw;
-        if (pres) sum_p += vw * pres[nb.j];
-      }
-      for (std::size_t q = 0; q < interpolated_.size(); ++q) {
-        Field& f = *interpolated_[q];
-        const int nc = f.components;
-        double* out = f.data.data() + static_cast<std::size_t>(nc) * w;
-        for (int c = 0; c < nc; ++c) out[c] = 0.0;
-        for (const Neighbour<D>& nb : fluid) {
-          const double vw = p.mass[nb.j] / p.density[nb.j] * nb.W;
-          const double* src = f.data.data() + static_cast<std::size_t>(nc) * nb.j;
-          for (int c = 0; c < nc; ++c) out[c] += vw * src[c];
-        }
-        if (vol_w > 0)
-          for (int c = 0; c < nc; ++c) out[c] /= vol_w;
-        if (normal_component_[q] > 0) out[diagonalComponent<D>(axis)] = 0.0;
-      }
+      const double vol_w = interpolateFields(p, w, fluid);
+      for (std::size_t q = 0; q < interpolated_.size(); ++q)
+        if (is_stress_[q]) interpolated_[q]->data[static_cast<std::size_t>(interpolated_[q]->components) * w +
+                                                  static_cast<std::size_t>(diagonalComponent<D>(axis))] = 0.0;
+      double sum_p = 0;
+      if (pres)
+        for (const Neighbour<D>& nb : fluid) sum_p += p.mass[nb.j] / p.density[nb.j] * nb.W * pres[nb.j];
       double* out_v = wv + D * (w - n0);
       for (int a = 0; a < D; ++a) out_v[a] = p.velocity[D * w + a];
       p.density[w] = rho0_;
@@ -100,22 +86,7 @@ void DummyWalls<D>::update(const RhsContext<D>& ctx, const NeighbourList<D>& lis
       sum_rho_gr += p.density[nb.j] * g_.dot(nb.rij) * nb.W;  // rij = r_w - r_f
     }
     double* out_v = wv + D * (w - n0);
-    // Fang eq. (46): normalised interpolation with the volumes m_f/rho_f.
-    for (Field* fp : interpolated_) {
-      Field& f = *fp;
-      const int nc = f.components;
-      double* out = f.data.data() + static_cast<std::size_t>(nc) * w;
-      double vol_w = 0;
-      for (int c = 0; c < nc; ++c) out[c] = 0.0;
-      for (const Neighbour<D>& nb : fluid) {
-        const double vw = p.mass[nb.j] / p.density[nb.j] * nb.W;
-        vol_w += vw;
-        const double* src = f.data.data() + static_cast<std::size_t>(nc) * nb.j;
-        for (int c = 0; c < nc; ++c) out[c] += vw * src[c];
-      }
-      if (vol_w > 0)
-        for (int c = 0; c < nc; ++c) out[c] /= vol_w;
-    }
+    interpolateFields(p, w, fluid);
     if (sumW > 0) {
       for (int a = 0; a < D; ++a) out_v[a] = 2.0 * p.velocity[D * w + a] - sum_v[a] / sumW;
       if (pres) {
@@ -133,6 +104,28 @@ void DummyWalls<D>::update(const RhsContext<D>& ctx, const NeighbourList<D>& lis
   if (images_.empty()) return;
 #pragma omp parallel for schedule(static) if (images_.size() >= kParallelMinimum)
   for (std::size_t k = 0; k < images_.size(); ++k) imageParticle(ctx, list, images_[k]);
+}
+
+template <int D>
+double DummyWalls<D>::interpolateFields(ParticleSet<D>& p, Index w, std::span<const Neighbour<D>> fluid) const {
+  // Fang eq. (46): the normalised interpolation with the volumes m_f/rho_f, for every flagged
+  // field (0 without fluid neighbours). Returns the weight sum sum_f (m_f/rho_f) W_wf.
+  double vol_w = 0;
+  for (const Neighbour<D>& nb : fluid) vol_w += p.mass[nb.j] / p.density[nb.j] * nb.W;
+  for (Field* fp : interpolated_) {
+    Field& f = *fp;
+    const int nc = f.components;
+    double* out = f.data.data() + static_cast<std::size_t>(nc) * w;
+    for (int c = 0; c < nc; ++c) out[c] = 0.0;
+    for (const Neighbour<D>& nb : fluid) {
+      const double vw = p.mass[nb.j] / p.density[nb.j] * nb.W;
+      const double* src = f.data.data() + static_cast<std::size_t>(nc) * nb.j;
+      for (int c = 0; c < nc; ++c) out[c] += vw * src[c];
+    }
+    if (vol_w > 0)
+      for (int c = 0; c < nc; ++c) out[c] /= vol_w;
+  }
+  return vol_w;
 }
 
 template <int D>

@@ -343,6 +343,10 @@ void Simulation<D>::generateParticles(ConfigTable& root) {
       }
     }
   if (p.n_moving == 0) root.fail("blocks", "at least one block of kind \"fluid\"");
+  // Scenes without image walls keep no per-wall-particle record (DummyWalls treats an empty
+  // one as all dummy layers).
+  if (std::none_of(wall_points_.begin(), wall_points_.end(), [](const WallPoint<D>& w) { return w.image; }))
+    std::vector<WallPoint<D>>().swap(wall_points_);
 }
 
 template <int D>

@@ -43,7 +43,8 @@
 
 namespace vesph {
 
-// How one fixed particle is treated (in fixed-particle order).
+// How one fixed particle is treated (in fixed-particle order; DummyWalls takes an empty list
+// for a scene of dummy layers only).
 template <int D>
 struct WallPoint {
   bool image = false;           // Fang's treatment (boundary particle when depth == 0)
@@ -71,9 +72,10 @@ class DummyWalls final : public Boundary<D> {
   double rho0_ = 1, dx_ = 1;
   std::vector<WallPoint<D>> points_;
   std::vector<Index> images_;     // the image particles (depth > 0), particle indices
-  std::vector<int> normal_component_;  // per interpolated field: -1, or which stresses' n.S.n to zero
+  std::vector<char> is_stress_;   // per interpolated field: a stress tensor (n.S.n = 0 on the wall)
   bool any_image_ = false;
 
+  double interpolateFields(ParticleSet<D>& p, Index w, std::span<const Neighbour<D>> fluid) const;
   void imageParticle(const RhsContext<D>& ctx, const NeighbourList<D>& list, Index w);
 };
 
