@@ -165,14 +165,14 @@ def scene_parameters(scene):
     images = [b for b in scene.get("blocks", [])
               if b.get("kind") == "wall" and b.get("treatment") == "image"]
     if images:
+        top = y0 + H
         floors = [float(b["max"][1]) for b in images if float(b["normal"][1]) > 0]
         ceilings = [float(b["min"][1]) for b in images if float(b["normal"][1]) < 0]
         if floors:
-            y0_new = max(floors)
-            H += y0 - y0_new
-            y0 = y0_new
+            y0 = max(floors)
         if ceilings:
-            H = min(ceilings) - y0
+            top = min(ceilings)
+        H = top - y0
     if H <= 0:
         raise ValueError(f"fluid blocks have non-positive height H = {H}")
     if rho <= 0 or mu <= 0:
