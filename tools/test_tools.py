@@ -46,6 +46,14 @@ DIR/<name>.h5 + DIR/<name>.xdmf (XDMF 3 in the layout the C++ writer uses)
     changed densities, a 3D sphere, two runs compared): the measured columns,
     the cluster / void / crack / nearest-neighbour indicators, the checks' exit codes (--max-volume-error,
     --no-fracture, --expect-fracture, --until) and the error messages,
+  * die_swell_measure.py, on synthetic planar die-swell outputs (a 25-row
+    die, walls, an inflow buffer and a floor beyond the exit, an extrudate
+    growing in length with time and swelling to 29-31 rows, N varying
+    between frames; a viscoelastic file with T_xx = a y, T_yy = b,
+    T_xy = c (y - W/2) and a Newtonian one): the swell ratios at the
+    stations (NaN before the extrudate arrives), the steady mean / std /
+    half range, the profiles against the analytic fields, the PNGs,
+    --expect-min/--expect-max and the bad-input errors and exit codes,
   * paraview_check.py (skipped when ParaView's Python modules are absent)
     reads the synthetic XDMF with the Xdmf3 reader.
 Prints one line per test and "N passed, M failed" at the end; exit status
@@ -1571,6 +1579,233 @@ def make_hydrostatic_tests(tmp):
             ("hydrostatic_check: no body force, missing file", bad_input)]
 
 
+# ------------------------------------------------------------ die swell
+DS_W, DS_DX, DS_EXIT = 0.01, 0.0004, 0.2      # 25 rows across the die
+DS_SCENE = 'name = "die_swell_synth"\ndimension = 2\n[particles]\nspacing = 0.0004\n'
+DS_U, DS_VY = 0.05, 0.001                    # centreline velocity, uniform v_y [m/s]
+DS_A, DS_B, DS_C = 2.0e4, 30.0, -5.0e3       # T_xx = a y, T_yy = b, T_xy = c (y - W/2) [Pa]
+
+
+def ds_particles(front, rows_far, swell_len=0.01):
+    """A die-swell-like frame: (position, kind). Die walls (kind 1): 3 rows below y = 0 and
+    above y = W for x in [0, 0.2]; a floor row (kind 1) at y = -0.02 beyond the exit; inflow
+    buffer (kind 3) at x < 0; fluid: 25 rows in the die (x < 0.2) and, for 0.2 < x < front, an
+    extrudate centred on W/2 whose row count grows linearly from 25 at the exit to rows_far
+    at x >= 0.2 + swell_len."""
+    dx = DS_DX
+    xd = (np.arange(int(round(DS_EXIT / dx))) + 0.5) * dx
+    yf = (np.arange(25) + 0.5) * dx
+    parts = [(np.column_stack([np.repeat(xd, 25), np.tile(yf, len(xd))]), 0)]
+    yw = np.concatenate([-(np.arange(3) + 0.5) * dx, DS_W + (np.arange(3) + 0.5) * dx])
+    parts.append((np.column_stack([np.repeat(xd, 6), np.tile(yw, len(xd))]), 1))
+    xb = -(np.arange(3) + 0.5) * dx
+    parts.append((np.column_stack([np.repeat(xb, 25), np.tile(yf, 3)]), 3))
+    xe = DS_EXIT + (np.arange(int(round(0.08 / dx))) + 0.5) * dx
+    parts.append((np.column_stack([xe, np.full(len(xe), -0.02)]), 1))
+    xe = xe[xe < front]
+    for x in xe:
+        n = int(round(25 + (rows_far - 25) * min(1.0, (x - DS_EXIT) / swell_len)))
+        y = 0.5 * DS_W + (np.arange(n) - 0.5 * (n - 1)) * dx
+        parts.append((np.column_stack([np.full(n, x), y]), 0))
+    pos = np.vstack([q for q, _ in parts])
+    kind = np.concatenate([np.full(len(q), k, np.uint8) for q, k in parts])
+    return pos, kind
+
+
+def ds_frames(stress=True):
+    """(time, front, rows_far) of the synthetic run: the extrudate reaches 0.215, 0.235 m,
+    then 0.26 m (all stations); from t = 0.3 s the far width is 29, 31, 30, 29, 31, 30 rows."""
+    spec = [(0.0, 0.2, 30), (0.1, 0.215, 30), (0.2, 0.235, 30)]
+    spec += [(0.3 + 0.1 * i, 0.26, n) for i, n in enumerate((29, 31, 30, 29, 31, 30))]
+    return spec
+
+
+def write_die_swell(path, stress=True, spec=None, scene=DS_SCENE, dim=2, frames=True):
+    with h5py.File(path, "w") as f:
+        f.attrs["format"] = "vesph-1"
+        f.attrs["dim"] = np.int64(dim)
+        f.attrs["scene"] = scene
+        f.attrs["dx"] = np.float64(DS_DX)
+        if not frames:
+            return path
+        for i, (t, front, rows_far) in enumerate(spec or ds_frames()):
+            pos, kind = ds_particles(front, rows_far)
+            n = len(kind)
+            g = f.create_group(f"frames/{i:06d}")
+            g.attrs["time"] = np.float64(t)
+            g.attrs["step"] = np.int64(100 * i)
+            y = pos[:, 1]
+            vel = np.zeros((n, 2))
+            fl = kind == 0
+            vel[fl, 0] = 4 * DS_U * y[fl] * (DS_W - y[fl]) / DS_W ** 2
+            vel[fl, 1] = DS_VY
+            g.create_dataset("id", data=np.arange(n, dtype=np.uint64))
+            g.create_dataset("kind", data=kind)
+            g.create_dataset("position", data=pos)
+            g.create_dataset("velocity", data=vel)
+            g.create_dataset("density", data=np.full(n, 1000.0))
+            g.create_dataset("mass", data=np.full(n, 1000.0 * DS_DX ** 2))
+            g.create_dataset("pressure", data=np.zeros(n))
+            if stress:
+                T = np.zeros((n, 3))
+                T[fl, 0] = DS_A * y[fl]
+                T[fl, 1] = DS_C * (y[fl] - 0.5 * DS_W)
+                T[fl, 2] = DS_B
+                g.create_dataset("extra_stress", data=T)
+    return path
+
+
+def make_die_swell_tests(tmp):
+    d = os.path.join(tmp, "die_swell")
+    os.makedirs(d, exist_ok=True)
+    tol = DS_DX / DS_W                       # 0.04
+    ve = write_die_swell(os.path.join(d, "ve.h5"))
+    newt = write_die_swell(os.path.join(d, "newt.h5"), stress=False)
+
+    def measure(path, *args, prefix=None):
+        prefix = prefix or os.path.splitext(os.path.basename(path))[0]
+        rc, out, err = tool("die_swell_measure.py", path, "--out-dir", d, "--prefix", prefix,
+                            *args)
+        res = {}
+        for suf in ("swell.csv", "profiles.csv"):
+            fn = os.path.join(d, f"{prefix}_{suf}")
+            res[suf] = read_csv_rows(fn) if rc in (0, 1) and os.path.exists(fn) else []
+        fn = os.path.join(d, f"{prefix}_summary.json")
+        if rc in (0, 1) and os.path.exists(fn):
+            with open(fn) as fh:
+                res["json"] = json.load(fh)
+        return rc, out, err, res
+
+    def swell_ratio_and_steady():
+        rc, out, err, res = measure(ve)
+        rows = res["swell.csv"]
+        expect(rc == 0 and len(rows) == 9, f"exit {rc}, {len(rows)} rows", out + err)
+        cols = list(rows[0].keys())
+        expect(cols == ["time_s", "ratio_x0.21", "ratio_x0.23", "ratio_x0.25", "ratio_average"],
+               f"columns {cols}")
+        nan = lambda v: math.isnan(float(v))  # noqa: E731
+        expect(all(nan(rows[0][c]) for c in cols[1:]), f"t = 0 should be all NaN: {rows[0]}")
+        expect(abs(float(rows[1]["ratio_x0.21"]) - 1.2) <= tol and nan(rows[1]["ratio_x0.23"])
+               and nan(rows[1]["ratio_average"]), f"t = 0.1: {rows[1]}")
+        expect(abs(float(rows[2]["ratio_x0.23"]) - 1.2) <= tol and nan(rows[2]["ratio_x0.25"])
+               and nan(rows[2]["ratio_average"]), f"t = 0.2: {rows[2]}")
+        for r, n in zip(rows[3:], (29, 31, 30, 29, 31, 30)):
+            for c in cols[1:]:
+                expect(abs(float(r[c]) - n * DS_DX / DS_W) <= 1e-9, f"t = {r['time_s']} {c}: "
+                       f"{r[c]} != {n * DS_DX / DS_W}")
+        js = res["json"]
+        a = js["average"]
+        expect(js["frames_used"] == 3 and abs(js["time_window_s"][0] - 0.6) < 1e-12
+               and abs(js["time_window_s"][1] - 0.8) < 1e-12, f"window {js}")
+        expect(abs(a["mean"] - 1.2) < 1e-9 and abs(a["half_range"] - 0.04) < 1e-9
+               and abs(a["std"] - 0.04 * math.sqrt(2 / 3)) < 1e-9, f"steady {a}")
+        st = js["stations"]
+        expect([s["frames_defined"] for s in st] == [8, 7, 6]
+               and all(abs(s["mean"] - 1.2) < 1e-9 for s in st), f"stations {st}")
+        expect("mean 1.2" in out, "steady mean not printed", out)
+        # --from: all six full frames; a wider slab sees the same width
+        rc, out, err, res = measure(ve, "--from", "0.3", "--window", "3", "--no-png")
+        a = res["json"]["average"]
+        expect(rc == 0 and res["json"]["frames_used"] == 6 and abs(a["mean"] - 1.2) < 1e-9,
+               f"--from 0.3: exit {rc}, {res.get('json')}", out + err)
+
+    def profiles_with_stress_and_pngs():
+        rc, out, err, res = measure(ve, "--expect-min", "1.15", "--expect-max", "1.25")
+        prof = res["profiles.csv"]
+        expect(rc == 0 and "PASS" in out and len(prof) == 25, f"exit {rc}, {len(prof)} rows",
+               out + err)
+        expect(list(prof[0].keys()) == ["y_m", "speed_m_s", "Txx_Pa", "Tyy_Pa", "Txy_Pa",
+                                        "N1_Pa"], f"columns {list(prof[0].keys())}")
+        ys = [float(r["y_m"]) for r in prof]
+        expect(ys == sorted(ys) and abs(ys[0] - 0.5 * DS_DX) < 1e-12, f"y {ys[:3]}")
+        for r in prof:
+            y = float(r["y_m"])
+            vx = 4 * DS_U * y * (DS_W - y) / DS_W ** 2
+            ref = {"speed_m_s": math.hypot(vx, DS_VY), "Txx_Pa": DS_A * y, "Tyy_Pa": DS_B,
+                   "Txy_Pa": DS_C * (y - 0.5 * DS_W), "N1_Pa": DS_A * y - DS_B}
+            for k, v in ref.items():
+                expect(abs(float(r[k]) - v) <= 1e-9 * max(1.0, abs(v)), f"y = {y}: {k} {r[k]} "
+                       f"!= {v}")
+        for suf in ("swell", "profiles", "n1"):
+            fn = os.path.join(d, f"ve_{suf}.png")
+            expect(os.path.exists(fn) and os.path.getsize(fn) > 0, f"no {fn}")
+        # --profile-time: the frame nearest 0.14 s is t = 0.1 s (no full extrudate: still fine)
+        rc, out, err, res = measure(ve, "--profile-time", "0.14", "--no-png")
+        expect(rc == 0 and res["json"]["profile"]["time_s"] == 0.1, f"--profile-time: exit "
+               f"{rc} {res.get('json', {}).get('profile')}", out + err)
+
+    def newtonian_velocity_only():
+        rc, out, err, res = measure(newt)
+        prof = res["profiles.csv"]
+        expect(rc == 0 and list(prof[0].keys()) == ["y_m", "speed_m_s"],
+               f"exit {rc}, columns {list(prof[0].keys()) if prof else None}", out + err)
+        expect("no extra_stress" in out, "the missing stress is not reported", out)
+        expect(os.path.getsize(os.path.join(d, "newt_n1.png")) > 0, "no particle picture")
+        expect(abs(res["json"]["average"]["mean"] - 1.2) < 1e-9, "Newtonian steady mean")
+        # default prefix = scene name, default out-dir = the file's directory
+        rc, out, err = tool("die_swell_measure.py", newt, "--no-png")
+        expect(rc == 0 and os.path.exists(os.path.join(d, "die_swell_synth_swell.csv"))
+               and not os.path.exists(os.path.join(d, "die_swell_synth_swell.png")),
+               f"default prefix: exit {rc}", out + err)
+
+    def expect_checks_fail():
+        rc, out, err, res = measure(ve, "--no-png", "--expect-min", "1.25")
+        expect(rc == 1 and "FAIL" in out and "OUTSIDE" in out
+               and res["json"]["checks"][0]["pass"] is False, f"--expect-min 1.25: exit {rc}",
+               out + err)
+        rc, out, err, _ = measure(ve, "--no-png", "--expect-max", "1.1")
+        expect(rc == 1 and "FAIL" in out, f"--expect-max 1.1: exit {rc}", out + err)
+        # no frame with a defined average (the extrudate never reaches 0.25 m)
+        short = write_die_swell(os.path.join(d, "short.h5"), spec=ds_frames()[:3])
+        rc, out, err, res = measure(short, "--no-png", "--expect-min", "1.0")
+        expect(rc == 1 and "no frame with a defined average" in out
+               and res["json"]["average"]["mean"] is None, f"short run: exit {rc}", out + err)
+
+    def bad_input():
+        rc, out, err = tool("die_swell_measure.py", os.path.join(d, "missing.h5"))
+        expect(rc == 1 and "die_swell_measure: error:" in err and "no such file" in err,
+               f"missing file: exit {rc}", out + err)
+        txt = os.path.join(d, "text.h5")
+        with open(txt, "w") as fh:
+            fh.write("not hdf5\n")
+        rc, out, err = tool("die_swell_measure.py", txt)
+        expect(rc == 1 and "not an HDF5 file" in err, f"text file: exit {rc}", out + err)
+        notv = os.path.join(d, "notvesph.h5")
+        with h5py.File(notv, "w") as f:
+            f.attrs["format"] = "other"
+        rc, out, err = tool("die_swell_measure.py", notv)
+        expect(rc == 1 and "not a vesph output" in err, f"not vesph: exit {rc}", out + err)
+        nof = write_die_swell(os.path.join(d, "noframes.h5"), frames=False)
+        rc, out, err = tool("die_swell_measure.py", nof)
+        expect(rc == 1 and "no /frames" in err, f"no frames: exit {rc}", out + err)
+        d3 = write_die_swell(os.path.join(d, "d3.h5"), dim=3, frames=False)
+        rc, out, err = tool("die_swell_measure.py", d3)
+        expect(rc == 1 and "2D" in err, f"3D: exit {rc}", out + err)
+        rc, out, err = tool("die_swell_measure.py", ve, "--stations", "0.19", "0.23")
+        expect(rc == 2 and "not beyond the die exit" in err, f"station in die: exit {rc}",
+               out + err)
+        rc, out, err = tool("die_swell_measure.py", ve, "--profile-x", "0.22")
+        expect(rc == 2 and "not inside the die" in err, f"profile x outside: exit {rc}",
+               out + err)
+        rc, out, err = tool("die_swell_measure.py", ve, "--profile-x", "-0.05", "--no-png")
+        expect(rc == 1 and "no fluid particle" in err, f"profile x without fluid: exit {rc}",
+               out + err)
+        rc, out, err = tool("die_swell_measure.py", ve, "--expect-min", "1.3", "--expect-max",
+                            "1.2")
+        expect(rc == 2, f"--expect-min > --expect-max: exit {rc}", out + err)
+        rc, out, err = tool("die_swell_measure.py", ve, "--window", "0")
+        expect(rc == 2 and "--window" in err, f"--window 0: exit {rc}", out + err)
+
+    return [("die_swell_measure: swell ratio per station, NaN before arrival, steady stats",
+             swell_ratio_and_steady),
+            ("die_swell_measure: analytic stress/velocity profiles, PNGs, --profile-time",
+             profiles_with_stress_and_pngs),
+            ("die_swell_measure: Newtonian run without extra_stress, default prefix",
+             newtonian_velocity_only),
+            ("die_swell_measure: --expect-min/--expect-max failures", expect_checks_fail),
+            ("die_swell_measure: bad input errors and exit codes", bad_input)]
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--keep", metavar="DIR", help="keep the synthetic outputs in DIR")
@@ -1586,7 +1821,8 @@ def main():
     os.makedirs(tmp, exist_ok=True)
     r = Runner()
     try:
-        for name, fn in make_tests(tmp) + make_xpp_tests(tmp) + make_drop_tests(tmp) + make_hydrostatic_tests(tmp):
+        for name, fn in (make_tests(tmp) + make_xpp_tests(tmp) + make_drop_tests(tmp)
+                         + make_hydrostatic_tests(tmp) + make_die_swell_tests(tmp)):
             r.run(name, fn)
     finally:
         if not a.keep:

@@ -87,8 +87,11 @@ void DummyWalls<D>::update(const RhsContext<D>& ctx, const NeighbourList<D>& lis
     }
     double* out_v = wv + D * (w - n0);
     interpolateFields(p, w, fluid);
+    // An inflow buffer particle is fluid upstream with a prescribed velocity: it carries its
+    // own velocity (a Dirichlet value), not the no-slip mirror of a wall.
+    const bool inflow = p.kind[w] == static_cast<std::uint8_t>(ParticleKind::inflow);
     if (sumW > 0) {
-      for (int a = 0; a < D; ++a) out_v[a] = 2.0 * p.velocity[D * w + a] - sum_v[a] / sumW;
+      for (int a = 0; a < D; ++a) out_v[a] = inflow ? p.velocity[D * w + a] : 2.0 * p.velocity[D * w + a] - sum_v[a] / sumW;
       if (pres) {
         pres[w] = (sum_p + sum_rho_gr) / sumW;
         p.density[w] = model_->densityFor(pres[w]);
@@ -187,6 +190,14 @@ void DummyWalls<D>::imageParticle(const RhsContext<D>& ctx, const NeighbourList<
       f.data[static_cast<std::size_t>(nc) * w + c] = fp + factor * (f.data[static_cast<std::size_t>(nc) * b + c] - fp);
     }
   }
+}
+
+template <int D>
+void DummyWalls<D>::resized(const ParticleRemap& remap) {
+  // Fixed particles keep their order; their indices move with the count of moving ones.
+  for (Index& w : images_) w = remap.fixedIndex(w);
+  for (WallPoint<D>& wp : points_)
+    if (wp.image) wp.boundary = remap.fixedIndex(wp.boundary);
 }
 
 template class DummyWalls<2>;

@@ -45,7 +45,7 @@ int NeighbourList<D>::cellCoord(int a, double x) const {
 template <int D>
 double NeighbourList<D>::maxDisplacement(const ParticleSet<D>& p) const {
   double m2 = 0;
-  const std::size_t n = p.n_moving;
+  const std::size_t n = track_fixed_ ? p.size() : p.n_moving;
 #pragma omp parallel for reduction(max : m2) schedule(static) if (n >= kParallelMinimum)
   for (std::size_t i = 0; i < n; ++i) {
     double d2 = 0;
@@ -153,7 +153,7 @@ void NeighbourList<D>::build(const ParticleSet<D>& p) {
     });
   }
 
-  reference_.assign(p.position.begin(), p.position.begin() + D * nm);
+  reference_.assign(p.position.begin(), p.position.begin() + D * (track_fixed_ ? N : nm));
   built_for_ = N;
   built_moving_ = nm;
   valid_ = true;

@@ -55,6 +55,29 @@ void ParticleSet<D>::resizeFields() {
   }
 }
 
+template <int D>
+void ParticleSet<D>::remapMoving(const ParticleRemap& m) {
+  if (m.old_size != size() || m.old_moving != n_moving) throw std::logic_error("ParticleRemap made for another particle set");
+  std::size_t released = 0;
+  for (Index s : m.source)
+    if (s >= n_moving) ++released;
+  if (released != m.released_ids.size()) throw std::logic_error("ParticleRemap: one id per released particle");
+  m.apply(position, D, Field::Range::all);
+  m.apply(velocity, D, Field::Range::all);
+  m.apply(density, 1, Field::Range::all);
+  m.apply(mass, 1, Field::Range::all);
+  m.apply(kind, 1, Field::Range::all);
+  m.apply(id, 1, Field::Range::all);
+  for (auto& f : fields.all()) m.apply(f->data, f->components, f->range);
+  std::size_t r = 0;
+  for (std::size_t i = 0; i < m.newMoving(); ++i)
+    if (m.source[i] >= m.old_moving) {
+      kind[i] = static_cast<std::uint8_t>(ParticleKind::fluid);
+      id[i] = m.released_ids[r++];
+    }
+  n_moving = m.newMoving();
+}
+
 template struct ParticleSet<2>;
 template struct ParticleSet<3>;
 

@@ -202,6 +202,16 @@ class SecondOrderFluid final : public PairEffect<D, SecondOrderFluid<D>> {
     }
   }
 
+  void resized(const ParticleSet<D>& p, const ParticleRemap& remap) override {
+    if (!lagged_) return;
+    // A released particle starts with its velocity as the previous one (no lagged rate yet
+    // beyond the buffer's extrapolated value, which the particle set carried over).
+    remap.apply(previous_velocity_, D, Field::Range::moving);
+    for (std::size_t i = 0; i < remap.newMoving(); ++i)
+      if (remap.source[i] >= remap.old_moving)
+        for (int a = 0; a < D; ++a) previous_velocity_[D * i + a] = p.velocity[D * i + a];
+  }
+
   // The pair pass: the gradient of the lagged acceleration (eq. 3.16) and, for procedure 4,
   // the Hessians of the velocity and of the lagged acceleration (eq. 3.36 in D dimensions:
   //   d2f/dx^b dx^c = sum_j V_j (f_i - f_j) F_ij ((D + 2) r^b r^c / r^2 - delta^bc),

@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "vesph/boundary/dummy_walls.hpp"
+#include "vesph/boundary/inflow_outflow.hpp"
 #include "vesph/io/progress.hpp"
 #include "vesph/isph/projection.hpp"
 #include "vesph/physics/registry.hpp"
@@ -78,6 +79,12 @@ Simulation<D>::Simulation(Config& config, const SceneHeader& header) : config_(c
   mu_ = fluid.number("viscosity", std::nullopt, Bound::nonnegative, "Pa s");
 
   generateParticles(root);
+  // Open boundaries (an inflow buffer of fixed particles, an outflow plane).
+  std::uint64_t next_id = 0;
+  for (std::uint64_t ident : system_.particles.id) next_id = std::max(next_id, ident + 1);
+  auto flow = InflowOutflow<D>::fromConfig(root, system_.particles, system_.domain, dx_, rho0_,
+                                           system_.kernel.supportRadius(), next_id);
+  if (!wall_points_.empty()) wall_points_.resize(system_.particles.nFixed());  // buffer: no image treatment
 
   // Effects, boundaries.
   ConfigTable effects = root.table("effects", false);
@@ -95,11 +102,16 @@ Simulation<D>::Simulation(Config& config, const SceneHeader& header) : config_(c
       if (w.image)
         throw InputError(config_.file() + ": blocks: treatment = \"image\" walls are not implemented with solver.scheme = "
                          "\"isph\" (the projection extrapolates the wall pressure as for dummy layers); use treatment = \"dummy\"");
+    if (flow)
+      throw InputError(config_.file() + ": inflow/outflow are not implemented with solver.scheme = \"isph\" yet (the "
+                       "projection treats every fixed particle as a wall with the Neumann condition); use scheme = \"wcsph\"");
     system_.hooks.push_back(makeProjection<D>(solver));
   } else {
     for (const std::string& key : solver.keys())
       if (key != "scheme") solver.fail(key, "no " + key + " with scheme = \"wcsph\" (the linear-solver keys belong to scheme = \"isph\")");
   }
+
+  if (flow) system_.hooks.push_back(std::move(flow));  // after the projection (DESIGN.md hook order)
 
   // Time, integrator, output, checks.
   ConfigTable time = root.table("time", false);
@@ -357,6 +369,7 @@ void Simulation<D>::markWallLayers() {
   const auto& list = system_.neighbours;
   const double reach2 = 2.25 * dx_ * dx_;
   for (std::size_t w = p.n_moving; w < p.size(); ++w) {
+    if (p.kind[w] == static_cast<std::uint8_t>(ParticleKind::inflow)) continue;
     bool touches = false;
     for (std::size_t k = list.start[w]; k < list.split[w] && !touches; ++k) {
       const Index j = list.nbr[k];
@@ -485,6 +498,7 @@ RunReport Simulation<D>::run(const RunOptions& opt) {
   auto writeFrame = [&](double t, const std::vector<double>& y) {
     if (!writer || t == last_frame_time) return;  // that state is written already
     last_frame_time = t;
+    scratch.resize(y.size());  // the particle count may have changed (inflow, outflow)
     system_.unpack(y.data());
     system_.evaluate(t, y.data(), scratch.data());
     writer->writeFrame(t, static_cast<std::int64_t>(steps), system_.particles, pending);
@@ -500,8 +514,9 @@ RunReport Simulation<D>::run(const RunOptions& opt) {
     ++steps;  // accepted and checked
     max_dev_seen = std::max(max_dev_seen, row.max_density_deviation);
     pending.push_back(row);
-    double* keep = last_good_.data();
     const std::size_t len = y_.size();
+    last_good_.resize(len);
+    double* keep = last_good_.data();
 #pragma omp parallel for schedule(static) if (len >= kParallelMinimumValues)
     for (std::size_t k = 0; k < len; ++k) keep[k] = y[k];
     last_good_time_ = t;
@@ -509,6 +524,13 @@ RunReport Simulation<D>::run(const RunOptions& opt) {
     if (interruptRequested()) return false;
     if (opt.max_steps && steps >= opt.max_steps) return false;
     return true;
+  };
+
+  // After a particle-count change the last good state is the rewritten one (same time).
+  system_.state_buffer = &y_;
+  system_.resize_observer = [&](double t, const double* y) {
+    last_good_.assign(y, y + y_.size());
+    last_good_time_ = t;
   };
 
   RunStatus status = RunStatus::ok;

@@ -56,7 +56,11 @@ void SphSystem<D>::setup(double spacing, double rest_density, double viscosity, 
     if (e->pairwise() != pair_phase)
       throw std::logic_error("effect " + std::string(e->name()) + " is in the wrong phase");
   }
+  next_id_ = 0;
+  for (std::uint64_t ident : particles.id) next_id_ = std::max(next_id_, ident + 1);
   neighbours.configure(domain, kernel.supportRadius(), skin);
+  // Inflow buffers move fixed particles: the list then watches their displacement as well.
+  neighbours.trackFixed(mayResize());
   neighbours.update(particles, true);
   driver.prepare(neighbours);
 }
@@ -213,6 +217,61 @@ bool SphSystem<D>::afterStepChangesState() const {
   for (const auto& hk : hooks)
     if (hk->changesState()) return true;
   return false;
+}
+
+template <int D>
+bool SphSystem<D>::mayResize() const {
+  for (const auto& hk : hooks)
+    if (hk->changesParticles()) return true;
+  return false;
+}
+
+template <int D>
+bool SphSystem<D>::resizePending() const {
+  for (const auto& hk : hooks)
+    if (hk->pendingChanges()) return true;
+  return false;
+}
+
+template <int D>
+double* SphSystem<D>::resizeState(double t, double* y) {
+  if (!state_buffer) throw std::logic_error("SphSystem::resizeState without a state buffer");
+  unpack(y);  // the particle set holds the accepted (and post-processed) state
+  changes_.remove.clear();
+  changes_.release.clear();
+  for (auto& hk : hooks) hk->collectChanges(*this, changes_);
+  const std::size_t n = particles.n_moving;
+  removed_flag_.assign(n, 0);
+  std::size_t removed_now = 0;
+  for (Index i : changes_.remove) {
+    if (i >= n) throw std::logic_error("a hook removes a fixed particle");
+    if (!removed_flag_[i]) ++removed_now;
+    removed_flag_[i] = 1;
+  }
+  remap_.old_size = particles.size();
+  remap_.old_moving = n;
+  remap_.source.clear();
+  remap_.released_ids.clear();
+  for (std::size_t i = 0; i < n; ++i)
+    if (!removed_flag_[i]) remap_.source.push_back(static_cast<Index>(i));
+  for (Index b : changes_.release) {
+    if (b < n || b >= particles.size()) throw std::logic_error("a hook releases a particle that is not fixed");
+    remap_.source.push_back(b);
+    remap_.released_ids.push_back(next_id_++);
+  }
+  particles.remapMoving(remap_);
+  for (auto& e : effects) e->resized(particles, remap_);
+  for (auto& b : boundaries) b->resized(remap_);
+  for (auto& hk : hooks) hk->resized(*this, remap_);
+  released_ += changes_.release.size();
+  removed_ += removed_now;
+  ++resizes_;
+  neighbours.update(particles, true);
+  driver.prepare(neighbours);
+  state_buffer->resize(size());
+  pack(state_buffer->data());
+  if (resize_observer) resize_observer(t, state_buffer->data());
+  return state_buffer->data();
 }
 
 template class SphSystem<2>;

@@ -86,15 +86,8 @@ class ArkodeErk final : public Integrator {
     sys_ = &system;
     t_ = t0;
     t_last_accepted_ = t0;
-    const sunindextype n = static_cast<sunindextype>(system.size());
-    const int threads = omp_get_max_threads();
-    if (threads > 1 && static_cast<std::size_t>(n) >= 4 * kParallelMinimum) {
-      y_ = N_VMake_OpenMP(n, y, threads, sunctx_);
-      N_VEnableFusedOps_OpenMP(y_, SUNTRUE);
-    } else {
-      y_ = N_VMake_Serial(n, y, sunctx_);
-      N_VEnableFusedOps_Serial(y_, SUNTRUE);
-    }
+    y_ = wrap(y);
+    resizable_ = system.mayResize();
     mem_ = ERKStepCreate(&ArkodeErk::rhs, t0, y_, sunctx_);
     if (!mem_) throw std::runtime_error("ERKStepCreate failed");
     check(ERKStepSetUserData(mem_, this), "SetUserData");
@@ -103,18 +96,7 @@ class ArkodeErk final : public Integrator {
     check(ERKStepSetPostprocessStepFn(mem_, &ArkodeErk::postStep), "SetPostprocessStepFn");
     if (std::isfinite(control_.max_step)) check(ERKStepSetMaxStep(mem_, control_.max_step), "SetMaxStep");
     if (adaptive_) {
-      // Per-field absolute tolerances (vector abstol) over the state segments.
-      atol_ = N_VClone(y_);
-      double* a = N_VGetArrayPointer(atol_);
-      const StateSegments s = system.segments();
-      const std::size_t nn = system.size();
-      for (std::size_t k = 0; k < nn; ++k) {
-        const bool pos = k >= s.position_begin && k < s.position_end;
-        const bool vel = k >= s.velocity_begin && k < s.velocity_end;
-        const bool stress = k >= s.velocity_end;
-        a[k] = pos ? atol_segments_[0] : vel ? atol_segments_[2] : stress ? atol_segments_[3] : atol_segments_[1];
-      }
-      check(ERKStepSVtolerances(mem_, rtol_, atol_), "SVtolerances");
+      setTolerances();
       check(ERKStepSetStabilityFn(mem_, &ArkodeErk::stability, this), "SetStabilityFn");
       // ARKODE multiplies the stability function's step by the CFL fraction, which must be
       // below 1; our limits already carry their coefficients, so the function returns the
@@ -130,6 +112,9 @@ class ArkodeErk final : public Integrator {
 
   bool advance(double tout) override {
     check(ERKStepSetStopTime(mem_, tout), "SetStopTime");
+    // A state whose length may change is advanced one step at a time, so that the particle
+    // changes happen between steps, outside ERKStepEvolve.
+    const int mode = adaptive_ && !resizable_ ? ARK_NORMAL : ARK_ONE_STEP;
     while (t_ < tout) {
       if (!adaptive_) {
         double h = control_.fixed_step > 0 ? control_.fixed_step : limit();
@@ -138,7 +123,7 @@ class ArkodeErk final : public Integrator {
         check(ERKStepSetFixedStep(mem_, h), "SetFixedStep");
       }
       double t = t_;
-      const int flag = ERKStepEvolve(mem_, tout, y_, &t, adaptive_ ? ARK_NORMAL : ARK_ONE_STEP);
+      const int flag = ERKStepEvolve(mem_, tout, y_, &t, mode);
       t_ = t;
       if (stop_requested_) return false;
       if (!pending_error_.empty()) throw NumericalFailure(pending_error_);
@@ -150,6 +135,7 @@ class ArkodeErk final : public Integrator {
         throw NumericalFailure(os.str());
       }
       if (flag == ARK_TSTOP_RETURN) t_ = tout;
+      if (resizable_ && sys_->resizePending()) resize(tout);
     }
     return true;
   }
@@ -175,6 +161,54 @@ class ArkodeErk final : public Integrator {
 
  private:
   double limit() const { return stepLimits(sys_->stability(), control_).smallest(); }
+
+  // N_Vector over the system's state buffer (no copy): the OpenMP vector with fused operations
+  // for large states when threads are available.
+  N_Vector wrap(double* y) {
+    const sunindextype n = static_cast<sunindextype>(sys_->size());
+    const int threads = omp_get_max_threads();
+    N_Vector v;
+    if (threads > 1 && static_cast<std::size_t>(n) >= 4 * kParallelMinimum) {
+      v = N_VMake_OpenMP(n, y, threads, sunctx_);
+      N_VEnableFusedOps_OpenMP(v, SUNTRUE);
+    } else {
+      v = N_VMake_Serial(n, y, sunctx_);
+      N_VEnableFusedOps_Serial(v, SUNTRUE);
+    }
+    if (!v) throw std::runtime_error("N_VMake failed");
+    return v;
+  }
+
+  // Per-field absolute tolerances (vector abstol) over the state segments.
+  void setTolerances() {
+    if (atol_) N_VDestroy(atol_);
+    atol_ = N_VClone(y_);
+    double* a = N_VGetArrayPointer(atol_);
+    const StateSegments s = sys_->segments();
+    const std::size_t nn = sys_->size();
+    for (std::size_t k = 0; k < nn; ++k) {
+      const bool pos = k >= s.position_begin && k < s.position_end;
+      const bool vel = k >= s.velocity_begin && k < s.velocity_end;
+      const bool stress = k >= s.velocity_end;
+      a[k] = pos ? atol_segments_[0] : vel ? atol_segments_[2] : stress ? atol_segments_[3] : atol_segments_[1];
+    }
+    check(ERKStepSVtolerances(mem_, rtol_, atol_), "SVtolerances");
+  }
+
+  // The particle set changed after the step just accepted: the system rewrites the state,
+  // ERKStepResize takes the new vector (hscale 1: the step size goes on; without a resize
+  // function ARKODE clones its work vectors from it), the tolerances are set again (ARKODE
+  // requires it after a resize with vector abstol) and so is the stop time.
+  void resize(double tout) {
+    double* y = sys_->resizeState(t_, N_VGetArrayPointer(y_));
+    N_Vector fresh = wrap(y);
+    check(ERKStepResize(mem_, fresh, 1.0, t_, nullptr, nullptr), "Resize");
+    N_VDestroy(y_);
+    y_ = fresh;
+    if (adaptive_) setTolerances();
+    check(ERKStepSetStopTime(mem_, tout), "SetStopTime");
+    ++resizes_;
+  }
 
   static void check(int flag, const char* what) {
     if (flag != ARK_SUCCESS) throw std::runtime_error(std::string("ARKODE ") + what + ": " + flagName(flag));
@@ -229,6 +263,8 @@ class ArkodeErk final : public Integrator {
   OdeSystem* sys_ = nullptr;
   double t_ = 0, t_last_accepted_ = 0;
   bool stop_requested_ = false;
+  bool resizable_ = false;
+  std::uint64_t resizes_ = 0;
   std::string pending_error_;
 };
 

@@ -41,7 +41,15 @@ class FixedStepIntegrator : public Integrator {
       last_dt_ = dt;
       ++stats_.steps;
       if (!sys_->afterStep(t_, dt, y_)) return false;
-      if (sys_->afterStepChangesState()) evaluate(t_, y_, rate_.data());  // F at the projected state
+      if (sys_->resizePending()) {  // particles released or removed: a new state, F again
+        y_ = sys_->resizeState(t_, y_);
+        n_ = sys_->size();
+        rate_.assign(n_, 0.0);
+        work_.assign(n_, 0.0);
+        evaluate(t_, y_, rate_.data());
+      } else if (sys_->afterStepChangesState()) {
+        evaluate(t_, y_, rate_.data());  // F at the projected state
+      }
     }
     return true;
   }

@@ -15,6 +15,8 @@ class Boundary {
   virtual std::string_view name() const = 0;
   virtual void setup(Setup<D>& s) = 0;
   virtual void update(const RhsContext<D>& ctx, const NeighbourList<D>& list, PairDriver<D>& driver) = 0;
+  // The moving set changed between steps: fixed particles moved to new indices (ParticleRemap).
+  virtual void resized(const ParticleRemap& remap) {}
 };
 
 }  // namespace vesph

@@ -61,6 +61,7 @@ class DummyWalls final : public Boundary<D> {
   std::string_view name() const override { return "dummy_walls"; }
   void setup(Setup<D>& s) override;
   void update(const RhsContext<D>& ctx, const NeighbourList<D>& list, PairDriver<D>& driver) override;
+  void resized(const ParticleRemap& remap) override;
 
  private:
   Field* wall_velocity_ = nullptr;

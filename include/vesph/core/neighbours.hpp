@@ -26,6 +26,13 @@ class NeighbourList {
   // cutoff: kernel support radius; skin: extra search distance (>= 0).
   void configure(const Domain<D>& domain, double cutoff, double skin);
 
+  // Whether fixed particles may move between builds (inflow buffers): their displacement then
+  // counts as well. Off by default: walls never move and cost nothing in the check.
+  void trackFixed(bool on) {
+    track_fixed_ = on;
+    valid_ = false;
+  }
+
   // Rebuilds when needed (or when force is set, or the particle count changed).
   // Returns true when it rebuilt.
   bool update(const ParticleSet<D>& particles, bool force = false);
@@ -98,7 +105,8 @@ class NeighbourList {
   std::vector<std::size_t> cell_start_;
   std::vector<Index> cell_items_;
   std::vector<Index> cell_of_;
-  std::vector<double> reference_;  // moving positions at the last build
+  std::vector<double> reference_;  // moving (or all, with track_fixed_) positions at the last build
+  bool track_fixed_ = false;
   std::size_t built_for_ = 0, built_moving_ = 0;
   std::size_t builds_ = 0, max_count_ = 0;
   bool valid_ = false;

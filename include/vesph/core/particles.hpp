@@ -6,8 +6,11 @@
 // active effect requests it through fields.require().
 #include <cstdint>
 #include <memory>
+#include <span>
 #include <string>
 #include <vector>
+
+#include <stdexcept>
 
 #include "vesph/core/types.hpp"
 
@@ -42,6 +45,29 @@ class FieldStore {
   std::vector<std::unique_ptr<Field>> fields_;
 };
 
+// A change of the moving set between two steps (an inflow releases particles, an outflow
+// removes them; DESIGN.md "Particle count may change during a run"). The fixed particles keep
+// their order; fixed particle k (old index old_moving + k) becomes new index newMoving() + k.
+struct ParticleRemap {
+  std::size_t old_size = 0, old_moving = 0;
+  // For each moving particle after the change, in order, the particle (old numbering) whose
+  // values it takes: itself for a kept particle, a fixed particle (>= old_moving) for one that
+  // an inflow buffer releases into the fluid (it starts with the buffer particle's values).
+  std::vector<Index> source;
+  std::vector<std::uint64_t> released_ids;  // the ids of the released particles, in order
+
+  std::size_t newMoving() const { return source.size(); }
+  std::size_t nFixed() const { return old_size - old_moving; }
+  std::size_t newSize() const { return newMoving() + nFixed(); }
+  // The new index of an old fixed particle.
+  Index fixedIndex(Index old) const { return static_cast<Index>(old - old_moving + newMoving()); }
+  // Rewrites per-particle values (comps per particle) laid out over the given range: moving
+  // values follow source (a released particle's moving-only value, which its buffer particle
+  // does not have, is `fill`); fixed values keep their order.
+  template <class T>
+  void apply(std::vector<T>& v, int comps, Field::Range range, T fill = T{}) const;
+};
+
 template <int D>
 struct ParticleSet {
   std::size_t n_moving = 0;
@@ -70,6 +96,27 @@ struct ParticleSet {
            std::uint64_t ident);
   // Resizes every registered field to the current particle count.
   void resizeFields();
+  // Applies a change of the moving set to every array and field (ParticleRemap). Released
+  // particles become kind fluid with the remap's new ids.
+  void remapMoving(const ParticleRemap& remap);
 };
+
+template <class T>
+void ParticleRemap::apply(std::vector<T>& v, int comps, Field::Range range, T fill) const {
+  if (range == Field::Range::fixed) return;
+  const bool all = range == Field::Range::all;
+  const std::size_t c = static_cast<std::size_t>(comps), nm = newMoving();
+  const std::size_t old_count = all ? old_size : old_moving;
+  if (v.size() != old_count * c) throw std::logic_error("ParticleRemap: values of the wrong length");
+  std::vector<T> out((all ? newSize() : nm) * c);
+  for (std::size_t i = 0; i < nm; ++i) {
+    const std::size_t s = source[i];
+    for (std::size_t k = 0; k < c; ++k) out[c * i + k] = (all || s < old_moving) ? v[c * s + k] : fill;
+  }
+  if (all)
+    for (std::size_t f = 0; f < nFixed(); ++f)
+      for (std::size_t k = 0; k < c; ++k) out[c * (nm + f) + k] = v[c * (old_moving + f) + k];
+  v.swap(out);
+}
 
 }  // namespace vesph

@@ -154,6 +154,10 @@ class Effect {
   // for effects that carry information from one step to the next. The right-hand side stays
   // a function of (t, y) within a step.
   virtual void afterStep(const AcceptedStep<D>& step) {}
+  // The moving set changed between two steps (an inflow released particles, an outflow removed
+  // some; ParticleRemap). The particle set has remapped its arrays and fields already; an
+  // effect that keeps other per-particle values from step to step rearranges them here.
+  virtual void resized(const ParticleSet<D>& particles, const ParticleRemap& remap) {}
 
   // Per-particle preparation for a pair effect, for values that the pair term reads for every
   // neighbour j and that are expensive per pair (the artificial stress R_j, Fang eqs. 40-44):

@@ -6,6 +6,7 @@
 // before their next step, and ARKODE recomputes its first stage anyway (a post-process
 // function is always registered, src/time/arkode.cpp).
 #include <string>
+#include <vector>
 #include <string_view>
 
 #include <nlohmann/json.hpp>
@@ -17,6 +18,12 @@ namespace vesph {
 
 template <int D>
 class SphSystem;
+
+// What the hooks ask of the particle set between two steps (inflow, outflow).
+struct ParticleChanges {
+  std::vector<Index> remove;   // moving particles to remove (outflow)
+  std::vector<Index> release;  // fixed (buffer) particles to copy into the fluid (inflow)
+};
 
 template <int D>
 class StepHook {
@@ -32,6 +39,15 @@ class StepHook {
   // y: the accepted state at time t, reached by a step of dt; the hook may change it.
   // Throws NumericalFailure when it cannot do its work (a failed linear solve).
   virtual void apply(SphSystem<D>& system, double t, double dt, double* y) = 0;
+  // Particle-count changes (inflow, outflow; DESIGN.md "Particle count may change"). A hook that
+  // may change the count says so at setup (changesParticles); after apply it says whether it
+  // has changes for this step (pendingChanges). The integrator then, between steps, has the
+  // system collect every hook's changes (collectChanges), rearrange the particles and the state
+  // (ParticleRemap) and tell every hook (resized).
+  virtual bool changesParticles() const { return false; }
+  virtual bool pendingChanges() const { return false; }
+  virtual void collectChanges(const SphSystem<D>& system, ParticleChanges& out) {}
+  virtual void resized(SphSystem<D>& system, const ParticleRemap& remap) {}
   // Per-step diagnostics columns of this hook (names fixed at setup) and their last values.
   virtual std::vector<std::string> diagnosticsColumns() const { return {}; }
   virtual void diagnostics(std::vector<double>& values) const {}

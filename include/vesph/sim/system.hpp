@@ -47,6 +47,18 @@ class SphSystem final : public OdeSystem {
   StabilitySnapshot stability() const override;
   bool afterStep(double t, double dt, double* y) override;
   bool afterStepChangesState() const override;
+  bool mayResize() const override;
+  bool resizePending() const override;
+  double* resizeState(double t, double* y) override;
+  // The buffer the integrator works on (owned by the Simulation): resizeState resizes it.
+  std::vector<double>* state_buffer = nullptr;
+  // Called after every particle-count change with the rewritten state (the Simulation's copy
+  // of the last good state must follow it).
+  std::function<void(double t, const double* y)> resize_observer;
+  // Particle-count bookkeeping (diagnostics, summary.json).
+  std::uint64_t released() const { return released_; }
+  std::uint64_t removed() const { return removed_; }
+  std::uint64_t resizes() const { return resizes_; }
 
   void pack(double* y) const;
   void unpack(const double* y);
@@ -67,6 +79,10 @@ class SphSystem final : public OdeSystem {
   Vec<D> body_acceleration_ = Vec<D>::Zero();
   double max_speed_ = 0, max_acceleration_ = 0;
   std::uint64_t rhs_evals_ = 0;
+  std::uint64_t next_id_ = 0, released_ = 0, removed_ = 0, resizes_ = 0;
+  ParticleChanges changes_;
+  ParticleRemap remap_;
+  std::vector<char> removed_flag_;
 };
 
 }  // namespace vesph

@@ -81,6 +81,16 @@ class OdeSystem {
   // Whether afterStep may change the state (a post-step projection): the fixed-step
   // integrators then evaluate the right-hand side again at the changed state.
   virtual bool afterStepChangesState() const { return false; }
+  // Particle-count changes between steps (inflow, outflow). mayResize: the state's length may
+  // change during the run (ARKODE then returns after every step). After afterStep returned
+  // true, an integrator asks resizePending(); if so it calls resizeState, which rewrites the
+  // state for the new particle set, possibly into a new buffer, and returns the buffer to go on
+  // with; size() and segments() then describe it. The integrator restarts from it as after a
+  // projection: the fixed-step ones evaluate the right-hand side again, ARKODE resizes
+  // (ERKStepResize) and sets its vector tolerances again.
+  virtual bool mayResize() const { return false; }
+  virtual bool resizePending() const { return false; }
+  virtual double* resizeState(double t, double* y) { return y; }
 };
 
 struct IntegratorStats {

@@ -1,0 +1,86 @@
+#pragma once
+// Open boundaries: an inflow buffer that feeds fluid at a prescribed velocity profile, and an
+// outflow plane past which fluid particles are removed (die swell, seed thesis Ch. 4; the
+// issue's "prescribed flow rate" option). A post-step hook (DESIGN.md "The shape": hooks
+// after each accepted step, "inflow"); the particle-count changes it asks for are made between
+// steps (StepHook::collectChanges, SphSystem::resizeState).
+//
+// Inflow buffer ([inflow]): a box of fixed particles (kind 3, "inflow") on the lattice of the
+// blocks, upstream of the inlet plane (the box face the flow direction points to). Each buffer
+// particle moves with the prescribed velocity u(s) e, e the flow direction, s the coordinate
+// across the box along profile_axis:
+//   uniform    u = U
+//   parabolic  u = 6 U eta (1 - eta), eta = (s - s_min) / (s_max - s_min)   (plane Poiseuille,
+//              fully developed; U its mean over the width, the flow rate U W per unit depth)
+// optionally ramped up from rest over ramp_time by 0.5 (1 - cos(pi t / T)) (the positions
+// advance by the exact integral of the ramped speed). The buffer is at least one kernel support
+// deep, so a fluid particle at the inlet has a full support. A buffer particle that crosses the
+// inlet plane is released into the fluid (a new moving particle, a new id, the buffer
+// particle's position, velocity, density and fields) and the buffer particle jumps back by
+// the buffer depth, so each lane keeps its lattice spacing and feeds at its own rate.
+// For the fluid the buffer is a wall with a Dirichlet velocity: its particles carry their own
+// velocity into the viscous term (no Adami mirror) and the pressure and stresses are
+// extrapolated from the fluid like those of dummy walls (a zero-gradient condition,
+// vesph/boundary/dummy_walls.hpp).
+//
+// Outflow ([outflow]): the plane x . n = position (n a coordinate unit vector pointing out);
+// after each step fluid particles beyond it are removed. It must lie inside the domain by at
+// least one kernel support.
+//
+// Mass accounting: released - removed = change of the fluid particle count, in the
+// diagnostics (columns released, removed, fluid_particles) and summary.json (flow{...}).
+#include <memory>
+#include <vector>
+
+#include "vesph/io/config.hpp"
+#include "vesph/sim/step_hook.hpp"
+
+namespace vesph {
+
+template <int D>
+class InflowOutflow final : public StepHook<D> {
+ public:
+  // Reads [inflow] and [outflow]; returns nullptr when the scene has neither. Appends the
+  // buffer particles to the set as fixed particles (after every other particle).
+  static std::unique_ptr<InflowOutflow> fromConfig(ConfigTable& root, ParticleSet<D>& particles,
+                                                   const Domain<D>& domain, double spacing, double rest_density,
+                                                   double support, std::uint64_t& next_id);
+
+  std::string_view name() const override { return "inflow_outflow"; }
+  void apply(SphSystem<D>& system, double t, double dt, double* y) override;
+  bool changesParticles() const override { return true; }
+  bool pendingChanges() const override { return !release_.empty() || !remove_.empty(); }
+  void collectChanges(const SphSystem<D>& system, ParticleChanges& out) override;
+  void resized(SphSystem<D>& system, const ParticleRemap& remap) override;
+  std::vector<std::string> diagnosticsColumns() const override { return {"released", "removed", "fluid_particles"}; }
+  void diagnostics(std::vector<double>& values) const override;
+  void summarize(nlohmann::json& summary) const override;
+  std::string describe() const override;
+
+  bool hasInflow() const { return !buffer_.empty(); }
+  // The buffer's speed factor at time t (the ramp) and its integral from 0 to t.
+  double rampFactor(double t) const;
+  double rampIntegral(double t) const;
+
+ private:
+  // Inflow.
+  std::vector<std::size_t> buffer_;  // buffer particles as offsets into the fixed particles
+  std::vector<double> speed_;        // their full prescribed speed u(s), m/s
+  int axis_ = 0;                     // flow direction e = sign e_axis
+  double sign_ = 1;
+  double inlet_ = 0;                 // the inlet plane x[axis] = inlet
+  double depth_ = 0;                 // buffer depth along the flow, m
+  double mean_velocity_ = 0, width_ = 0, ramp_time_ = 0;
+  std::string profile_;
+  // Outflow.
+  bool outflow_ = false;
+  int out_axis_ = 0;
+  double out_sign_ = 1, out_position_ = 0;
+  // This step's changes and the totals.
+  std::vector<Index> release_, remove_;
+  std::vector<std::size_t> released_offsets_;  // buffer offsets released this step
+  std::uint64_t released_ = 0, removed_ = 0;
+  std::size_t fluid_count_ = 0;
+};
+
+}  // namespace vesph

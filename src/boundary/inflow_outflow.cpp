@@ -1,0 +1,215 @@
+#include "vesph/boundary/inflow_outflow.hpp"
+
+#include <cmath>
+#include <numbers>
+#include <sstream>
+
+#include "vesph/sim/system.hpp"
+
+namespace vesph {
+
+namespace {
+// A coordinate unit vector (the only directions a lattice box can face): its axis and sign.
+template <int D>
+void unitAxis(ConfigTable& t, std::string_view key, const Vec<D>& v, int& axis, double& sign) {
+  int nonzero = 0;
+  for (int a = 0; a < D; ++a)
+    if (v[a] != 0.0) {
+      ++nonzero;
+      axis = a;
+    }
+  if (nonzero != 1 || std::abs(std::abs(v[axis]) - 1.0) > 1e-12)
+    t.fail(key, "a coordinate unit vector, e.g. [1.0, 0.0] for +x");
+  sign = v[axis] > 0 ? 1.0 : -1.0;
+}
+}  // namespace
+
+template <int D>
+std::unique_ptr<InflowOutflow<D>> InflowOutflow<D>::fromConfig(ConfigTable& root, ParticleSet<D>& p,
+                                                               const Domain<D>& dom, double dx, double rho0,
+                                                               double support, std::uint64_t& next_id) {
+  const bool inflow = root.isTable("inflow"), outflow = root.isTable("outflow");
+  if (!inflow && !outflow) return nullptr;
+  auto hook = std::make_unique<InflowOutflow<D>>();
+  if (inflow) {
+    ConfigTable in = root.table("inflow", false);
+    const Vec<D> lo = in.vector<D>("min", std::nullopt, "m");
+    const Vec<D> hi = in.vector<D>("max", std::nullopt, "m");
+    unitAxis<D>(in, "direction", in.vector<D>("direction", std::nullopt), hook->axis_, hook->sign_);
+    std::array<long, D> n;
+    for (int a = 0; a < D; ++a) {
+      const double cells = (hi[a] - lo[a]) / dx;
+      if (!(cells > 0.5) || std::abs(cells - std::round(cells)) > 1e-6 * std::max(1.0, cells)) {
+        std::ostringstream os;
+        os << "a corner above min by a whole number of particle spacings (" << dx << " m) along axis " << a;
+        in.fail("max", os.str());
+      }
+      if (lo[a] < dom.lo[a] - 1e-9 * dom.length(a) || hi[a] > dom.hi[a] + 1e-9 * dom.length(a))
+        in.fail("max", "a buffer inside the domain [domain.min, domain.max]");
+      n[a] = std::lround(cells);
+    }
+    const int ax = hook->axis_;
+    hook->depth_ = hi[ax] - lo[ax];
+    hook->inlet_ = hook->sign_ > 0 ? hi[ax] : lo[ax];
+    if (hook->depth_ < support * (1 - 1e-9)) {
+      std::ostringstream os;
+      os << "a buffer at least one kernel support deep along the flow (" << support << " m = "
+         << std::ceil(support / dx - 1e-9) << " spacings), so that fluid at the inlet has a full support; it is "
+         << hook->depth_ << " m";
+      in.fail("max", os.str());
+    }
+    hook->profile_ = in.choice("profile", "parabolic", {"uniform", "parabolic"});
+    hook->mean_velocity_ = in.number("mean_velocity", std::nullopt, Bound::positive, "m/s");
+    hook->ramp_time_ = in.number("ramp_time", 0.0, Bound::nonnegative, "s");
+    int across = D == 2 ? 1 - ax : -1;
+    if (hook->profile_ == "parabolic") {
+      if (D == 3 || in.has("profile_axis"))
+        across = static_cast<int>(in.integer("profile_axis", D == 2 ? std::optional<long long>(1 - ax) : std::nullopt, 0, D - 1));
+      if (across == ax) in.fail("profile_axis", "an axis across the flow direction (not the flow axis)");
+      hook->width_ = hi[across] - lo[across];
+    } else {
+      hook->width_ = D == 2 ? hi[1 - ax] - lo[1 - ax] : 0.0;
+    }
+    // The buffer particles: cell centres of the box, as for blocks (fixed, kind inflow).
+    long total = 1;
+    for (int a = 0; a < D; ++a) total *= n[a];
+    const double mass = rho0 * std::pow(dx, D);
+    for (long k = 0; k < total; ++k) {
+      long rem = k;
+      Vec<D> x;
+      for (int a = 0; a < D; ++a) {
+        x[a] = lo[a] + (static_cast<double>(rem % n[a]) + 0.5) * dx;
+        rem /= n[a];
+      }
+      double u = hook->mean_velocity_;
+      if (hook->profile_ == "parabolic") {
+        const double eta = (x[across] - lo[across]) / hook->width_;
+        u = 6.0 * hook->mean_velocity_ * eta * (1.0 - eta);
+      }
+      Vec<D> v = Vec<D>::Zero();
+      v[ax] = hook->sign_ * u * hook->rampFactor(0.0);
+      hook->buffer_.push_back(p.nFixed());
+      hook->speed_.push_back(u);
+      p.add(x, v, rho0, mass, ParticleKind::inflow, next_id++);
+    }
+  }
+  if (outflow) {
+    ConfigTable out = root.table("outflow", false);
+    hook->outflow_ = true;
+    unitAxis<D>(out, "normal", out.vector<D>("normal", std::nullopt), hook->out_axis_, hook->out_sign_);
+    hook->out_position_ = out.number("position", std::nullopt, Bound::any, "m");
+    const int a = hook->out_axis_;
+    const double edge = hook->out_sign_ > 0 ? dom.hi[a] : dom.lo[a];
+    if ((edge - hook->out_position_) * hook->out_sign_ < support * (1 - 1e-9)) {
+      std::ostringstream os;
+      os << "an outflow plane inside the domain by at least one kernel support (" << support
+         << " m) from its boundary at " << edge << " m, so that particles are removed before they leave it";
+      out.fail("position", os.str());
+    }
+  }
+  hook->fluid_count_ = p.n_moving;
+  return hook;
+}
+
+template <int D>
+double InflowOutflow<D>::rampFactor(double t) const {
+  if (ramp_time_ <= 0 || t >= ramp_time_) return 1.0;
+  return 0.5 * (1.0 - std::cos(std::numbers::pi * t / ramp_time_));
+}
+
+template <int D>
+double InflowOutflow<D>::rampIntegral(double t) const {
+  if (ramp_time_ <= 0) return t;
+  const double T = ramp_time_;
+  if (t >= T) return 0.5 * T + (t - T);
+  return 0.5 * t - 0.5 * T / std::numbers::pi * std::sin(std::numbers::pi * t / T);
+}
+
+template <int D>
+void InflowOutflow<D>::apply(SphSystem<D>& system, double t, double dt, double* y) {
+  ParticleSet<D>& p = system.particles;
+  const std::size_t n0 = p.n_moving;
+  release_.clear();
+  released_offsets_.clear();
+  remove_.clear();
+  if (!buffer_.empty()) {
+    // The buffer moves by the exact integral of its (ramped) speed over the step.
+    const double advance = rampIntegral(t) - rampIntegral(t - dt);
+    const double factor = rampFactor(t);
+    for (std::size_t k = 0; k < buffer_.size(); ++k) {
+      const std::size_t b = n0 + buffer_[k];
+      double& x = p.position[D * b + axis_];
+      x += sign_ * speed_[k] * advance;
+      p.velocity[D * b + axis_] = sign_ * speed_[k] * factor;
+      if ((x - inlet_) * sign_ > 0) {
+        release_.push_back(static_cast<Index>(b));
+        released_offsets_.push_back(buffer_[k]);
+      }
+    }
+  }
+  if (outflow_)
+    for (std::size_t i = 0; i < n0; ++i)
+      if ((y[D * i + out_axis_] - out_position_) * out_sign_ > 0) remove_.push_back(static_cast<Index>(i));
+  fluid_count_ = n0 + release_.size() - remove_.size();
+}
+
+template <int D>
+void InflowOutflow<D>::collectChanges(const SphSystem<D>&, ParticleChanges& out) {
+  out.remove.insert(out.remove.end(), remove_.begin(), remove_.end());
+  out.release.insert(out.release.end(), release_.begin(), release_.end());
+}
+
+template <int D>
+void InflowOutflow<D>::resized(SphSystem<D>& system, const ParticleRemap& remap) {
+  // A released buffer particle goes back by the buffer depth: its lane keeps its spacing.
+  ParticleSet<D>& p = system.particles;
+  for (std::size_t off : released_offsets_) p.position[D * (remap.newMoving() + off) + axis_] -= sign_ * depth_;
+  released_ += release_.size();
+  removed_ += remove_.size();
+  release_.clear();
+  released_offsets_.clear();
+  remove_.clear();
+  fluid_count_ = p.n_moving;
+}
+
+template <int D>
+void InflowOutflow<D>::diagnostics(std::vector<double>& values) const {
+  // The row of a step counts that step's changes (made right after it).
+  values.push_back(static_cast<double>(released_ + release_.size()));
+  values.push_back(static_cast<double>(removed_ + remove_.size()));
+  values.push_back(static_cast<double>(fluid_count_));
+}
+
+template <int D>
+void InflowOutflow<D>::summarize(nlohmann::json& summary) const {
+  nlohmann::json j;
+  j["released"] = released_;
+  j["removed"] = removed_;
+  j["fluid_particles"] = fluid_count_;
+  if (!buffer_.empty()) {
+    j["buffer_particles"] = buffer_.size();
+    j["mean_velocity"] = mean_velocity_;
+    j["profile"] = profile_;
+  }
+  summary["flow"] = j;
+}
+
+template <int D>
+std::string InflowOutflow<D>::describe() const {
+  std::ostringstream os;
+  const char* axes = "xyz";
+  if (!buffer_.empty())
+    os << "# inflow: " << buffer_.size() << " buffer particles, " << profile_ << " profile of mean " << mean_velocity_
+       << " m/s along " << (sign_ > 0 ? "+" : "-") << axes[axis_] << " through the inlet " << axes[axis_] << " = "
+       << inlet_ << " m (buffer depth " << depth_ << " m" << (ramp_time_ > 0 ? ", ramped over " : "")
+       << (ramp_time_ > 0 ? std::to_string(ramp_time_) + " s" : std::string()) << ")\n";
+  if (outflow_)
+    os << "# outflow: fluid particles past " << axes[out_axis_] << " = " << out_position_ << " m ("
+       << (out_sign_ > 0 ? "+" : "-") << axes[out_axis_] << ") are removed\n";
+  return os.str();
+}
+
+template class InflowOutflow<2>;
+template class InflowOutflow<3>;
+
+}  // namespace vesph
