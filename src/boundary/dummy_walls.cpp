@@ -77,20 +77,28 @@ void DummyWalls<D>::update(const RhsContext<D>& ctx, const NeighbourList<D>& lis
       if (pres) pres[w] = vol_w > 0 ? sum_p / vol_w : model_->pressure(rho0_);
       return;
     }
+    // An inflow buffer particle is fluid upstream with a prescribed velocity: it carries its
+    // own velocity (a Dirichlet value), not the no-slip mirror of a wall, and the fluid's
+    // pressure without the hydrostatic term (a zero-gradient inlet: a wall's term would balance
+    // the body force at the inlet and hold the fluid back like a wall does).
+    const bool inflow = p.kind[w] == static_cast<std::uint8_t>(ParticleKind::inflow);
     double sumW = 0, sum_p = 0, sum_rho_gr = 0;
     Vec<D> sum_v = Vec<D>::Zero();
     for (const Neighbour<D>& nb : fluid) {
       sumW += nb.W;
       sum_v += nb.W * p.v(nb.j);
       if (pres) sum_p += pres[nb.j] * nb.W;
-      sum_rho_gr += p.density[nb.j] * g_.dot(nb.rij) * nb.W;  // rij = r_w - r_f
+      if (!inflow) sum_rho_gr += p.density[nb.j] * g_.dot(nb.rij) * nb.W;  // rij = r_w - r_f
     }
     double* out_v = wv + D * (w - n0);
     interpolateFields(p, w, fluid);
-    // An inflow buffer particle is fluid upstream with a prescribed velocity: it carries its
-    // own velocity (a Dirichlet value), not the no-slip mirror of a wall.
-    const bool inflow = p.kind[w] == static_cast<std::uint8_t>(ParticleKind::inflow);
-    if (sumW > 0) {
+    if (inflow && ambient_inlet_) {  // a pressure inlet: the ambient pressure, rho0
+      for (int a = 0; a < D; ++a) out_v[a] = p.velocity[D * w + a];
+      if (pres) {
+        p.density[w] = rho0_;
+        pres[w] = model_->pressure(rho0_);
+      }
+    } else if (sumW > 0) {
       for (int a = 0; a < D; ++a) out_v[a] = inflow ? p.velocity[D * w + a] : 2.0 * p.velocity[D * w + a] - sum_v[a] / sumW;
       if (pres) {
         pres[w] = (sum_p + sum_rho_gr) / sumW;

@@ -1,6 +1,7 @@
 #include "vesph/boundary/inflow_outflow.hpp"
 
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <sstream>
 
@@ -58,9 +59,22 @@ std::unique_ptr<InflowOutflow<D>> InflowOutflow<D>::fromConfig(ConfigTable& root
          << hook->depth_ << " m";
       in.fail("max", os.str());
     }
-    hook->profile_ = in.choice("profile", "parabolic", {"uniform", "parabolic"});
-    hook->mean_velocity_ = in.number("mean_velocity", std::nullopt, Bound::positive, "m/s");
-    hook->ramp_time_ = in.number("ramp_time", 0.0, Bound::nonnegative, "s");
+    hook->spacing_ = dx;
+    hook->lo_ = lo;
+    hook->counts_ = n;
+    hook->extrapolated_ = in.choice("velocity", "prescribed", {"prescribed", "extrapolated"}) == "extrapolated";
+    if (hook->extrapolated_) {
+      for (const char* key : {"profile", "mean_velocity", "ramp_time", "profile_axis"})
+        if (in.has(key))
+          in.fail(key, std::string("no ") + key + " with velocity = \"extrapolated\" (the buffer follows the fluid at the inlet; "
+                       "the scene drives the flow, e.g. by a body force in the die)");
+      hook->profile_ = "extrapolated";
+    }
+    if (!hook->extrapolated_) {
+      hook->profile_ = in.choice("profile", "parabolic", {"uniform", "parabolic"});
+      hook->mean_velocity_ = in.number("mean_velocity", std::nullopt, Bound::positive, "m/s");
+      hook->ramp_time_ = in.number("ramp_time", 0.0, Bound::nonnegative, "s");
+    }
     int across = D == 2 ? 1 - ax : -1;
     if (hook->profile_ == "parabolic") {
       if (D == 3 || in.has("profile_axis"))
@@ -81,7 +95,7 @@ std::unique_ptr<InflowOutflow<D>> InflowOutflow<D>::fromConfig(ConfigTable& root
         x[a] = lo[a] + (static_cast<double>(rem % n[a]) + 0.5) * dx;
         rem /= n[a];
       }
-      double u = hook->mean_velocity_;
+      double u = hook->extrapolated_ ? 0.0 : hook->mean_velocity_;
       if (hook->profile_ == "parabolic") {
         const double eta = (x[across] - lo[across]) / hook->width_;
         u = 6.0 * hook->mean_velocity_ * eta * (1.0 - eta);
@@ -90,6 +104,7 @@ std::unique_ptr<InflowOutflow<D>> InflowOutflow<D>::fromConfig(ConfigTable& root
       v[ax] = hook->sign_ * u * hook->rampFactor(0.0);
       hook->buffer_.push_back(p.nFixed());
       hook->speed_.push_back(u);
+      hook->lane_.push_back(hook->laneOf(x));
       p.add(x, v, rho0, mass, ParticleKind::inflow, next_id++);
     }
   }
@@ -107,8 +122,70 @@ std::unique_ptr<InflowOutflow<D>> InflowOutflow<D>::fromConfig(ConfigTable& root
       out.fail("position", os.str());
     }
   }
+  if (hook->extrapolated_) {
+    std::size_t lanes = 1;
+    for (int a = 0; a < D; ++a)
+      if (a != hook->axis_) lanes *= static_cast<std::size_t>(hook->counts_[a]);
+    hook->lane_speed_.assign(lanes, 0.0);
+    hook->lane_sum_.assign(lanes, 0.0);
+    hook->lane_count_.assign(lanes, 0);
+    hook->lane_trail_.assign(lanes, 0.0);
+    hook->lane_lead_.assign(lanes, 0.0);
+    hook->lane_shift_.assign(lanes, 0.0);
+    hook->support_ = support;
+  }
   hook->fluid_count_ = p.n_moving;
   return hook;
+}
+
+template <int D>
+long InflowOutflow<D>::laneOf(const Vec<D>& x) const {
+  // The buffer's lattice coordinates across the flow, as one index; -1 outside the buffer's
+  // cross-section.
+  long lane = 0, stride = 1;
+  for (int a = 0; a < D; ++a) {
+    if (a == axis_) continue;
+    const long c = static_cast<long>(std::floor((x[a] - lo_[a]) / spacing_));
+    if (c < 0 || c >= counts_[a]) return -1;
+    lane += stride * c;
+    stride *= counts_[a];
+  }
+  return lane;
+}
+
+template <int D>
+void InflowOutflow<D>::followFluid(ParticleSet<D>& p, const double* y, std::size_t n) {
+  // Per lane: the mean velocity along the flow of the fluid within two spacings downstream of
+  // the inlet (the buffer's velocity as the fluid sees it), and the most upstream fluid
+  // particle within one support. The lane then moves so that its leading buffer particle sits
+  // one spacing behind that fluid particle: the buffer stays attached to the fluid, so the
+  // inlet never opens a gap, and never moves backwards.
+  std::fill(lane_sum_.begin(), lane_sum_.end(), 0.0);
+  std::fill(lane_count_.begin(), lane_count_.end(), 0);
+  std::fill(lane_trail_.begin(), lane_trail_.end(), std::numeric_limits<double>::infinity());
+  std::fill(lane_lead_.begin(), lane_lead_.end(), -std::numeric_limits<double>::infinity());
+  const double* v = y + n * (D + 1);
+  for (std::size_t i = 0; i < n; ++i) {
+    const double s = (y[D * i + axis_] - inlet_) * sign_;
+    if (s >= support_) continue;
+    const long lane = laneOf(Eigen::Map<const Vec<D>>(y + D * i));
+    if (lane < 0) continue;
+    const std::size_t l = static_cast<std::size_t>(lane);
+    lane_trail_[l] = std::min(lane_trail_[l], s);
+    if (s >= 0 && s < 2 * spacing_) {
+      lane_sum_[l] += sign_ * v[D * i + axis_];
+      ++lane_count_[l];
+    }
+  }
+  const std::size_t n0 = p.n_moving;
+  for (std::size_t k = 0; k < buffer_.size(); ++k) {
+    const std::size_t l = static_cast<std::size_t>(lane_[k]);
+    lane_lead_[l] = std::max(lane_lead_[l], (p.position[D * (n0 + buffer_[k]) + axis_] - inlet_) * sign_);
+  }
+  for (std::size_t l = 0; l < lane_speed_.size(); ++l) {
+    if (lane_count_[l] > 0) lane_speed_[l] = std::max(0.0, lane_sum_[l] / static_cast<double>(lane_count_[l]));
+    lane_shift_[l] = std::isfinite(lane_trail_[l]) ? std::max(0.0, lane_trail_[l] - spacing_ - lane_lead_[l]) : 0.0;
+  }
 }
 
 template <int D>
@@ -133,14 +210,22 @@ void InflowOutflow<D>::apply(SphSystem<D>& system, double t, double dt, double* 
   released_offsets_.clear();
   remove_.clear();
   if (!buffer_.empty()) {
-    // The buffer moves by the exact integral of its (ramped) speed over the step.
+    // A prescribed buffer moves by the exact integral of its (ramped) speed over the step; an
+    // extrapolated one follows the fluid (followFluid).
     const double advance = rampIntegral(t) - rampIntegral(t - dt);
     const double factor = rampFactor(t);
+    if (extrapolated_) followFluid(p, y, n0);
     for (std::size_t k = 0; k < buffer_.size(); ++k) {
       const std::size_t b = n0 + buffer_[k];
       double& x = p.position[D * b + axis_];
-      x += sign_ * speed_[k] * advance;
-      p.velocity[D * b + axis_] = sign_ * speed_[k] * factor;
+      if (extrapolated_) {
+        const std::size_t l = static_cast<std::size_t>(lane_[k]);
+        x += sign_ * lane_shift_[l];
+        p.velocity[D * b + axis_] = sign_ * lane_speed_[l];
+      } else {
+        x += sign_ * speed_[k] * advance;
+        p.velocity[D * b + axis_] = sign_ * speed_[k] * factor;
+      }
       if ((x - inlet_) * sign_ > 0) {
         release_.push_back(static_cast<Index>(b));
         released_offsets_.push_back(buffer_[k]);
@@ -188,8 +273,15 @@ void InflowOutflow<D>::summarize(nlohmann::json& summary) const {
   j["fluid_particles"] = fluid_count_;
   if (!buffer_.empty()) {
     j["buffer_particles"] = buffer_.size();
-    j["mean_velocity"] = mean_velocity_;
-    j["profile"] = profile_;
+    j["velocity"] = extrapolated_ ? "extrapolated" : "prescribed";
+    if (!extrapolated_) {
+      j["mean_velocity"] = mean_velocity_;
+      j["profile"] = profile_;
+    } else {
+      double mean = 0;
+      for (double u : lane_speed_) mean += u;
+      j["inlet_mean_velocity"] = lane_speed_.empty() ? 0.0 : mean / static_cast<double>(lane_speed_.size());
+    }
   }
   summary["flow"] = j;
 }
@@ -198,7 +290,11 @@ template <int D>
 std::string InflowOutflow<D>::describe() const {
   std::ostringstream os;
   const char* axes = "xyz";
-  if (!buffer_.empty())
+  if (!buffer_.empty() && extrapolated_)
+    os << "# inflow: " << buffer_.size() << " buffer particles moving with the fluid at the inlet (velocity extrapolated "
+       << "per lane) along " << (sign_ > 0 ? "+" : "-") << axes[axis_] << " through the inlet " << axes[axis_] << " = "
+       << inlet_ << " m (buffer depth " << depth_ << " m)\n";
+  else if (!buffer_.empty())
     os << "# inflow: " << buffer_.size() << " buffer particles, " << profile_ << " profile of mean " << mean_velocity_
        << " m/s along " << (sign_ > 0 ? "+" : "-") << axes[axis_] << " through the inlet " << axes[axis_] << " = "
        << inlet_ << " m (buffer depth " << depth_ << " m" << (ramp_time_ > 0 ? ", ramped over " : "")

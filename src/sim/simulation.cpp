@@ -91,7 +91,8 @@ Simulation<D>::Simulation(Config& config, const SceneHeader& header) : config_(c
   system_.effects = makeEffects<D>(effects);
   if (system_.effects.empty())
     effects.fail("continuity", "at least one effect, e.g. [effects.continuity]");
-  if (system_.particles.nFixed() > 0) system_.boundaries.push_back(std::make_unique<DummyWalls<D>>(wall_points_));
+  if (system_.particles.nFixed() > 0)
+    system_.boundaries.push_back(std::make_unique<DummyWalls<D>>(wall_points_, flow && flow->extrapolatedVelocity()));
 
   // Pressure scheme: weakly compressible (the pressure from an equation of state, an effect)
   // or incompressible (the projection after every step, src/isph).

@@ -57,7 +57,11 @@ struct WallPoint {
 template <int D>
 class DummyWalls final : public Boundary<D> {
  public:
-  explicit DummyWalls(std::vector<WallPoint<D>> points = {}) : points_(std::move(points)) {}
+  // ambient_inlet: inflow buffer particles (kind inflow) take the ambient pressure (that of
+  // rho0) instead of the fluid's extrapolated pressure: the pressure inlet that goes with an
+  // extrapolated inflow velocity (vesph/boundary/inflow_outflow.hpp).
+  explicit DummyWalls(std::vector<WallPoint<D>> points = {}, bool ambient_inlet = false)
+      : points_(std::move(points)), ambient_inlet_(ambient_inlet) {}
   std::string_view name() const override { return "dummy_walls"; }
   void setup(Setup<D>& s) override;
   void update(const RhsContext<D>& ctx, const NeighbourList<D>& list, PairDriver<D>& driver) override;
@@ -75,6 +79,7 @@ class DummyWalls final : public Boundary<D> {
   std::vector<Index> images_;     // the image particles (depth > 0), particle indices
   std::vector<char> is_stress_;   // per interpolated field: a stress tensor (n.S.n = 0 on the wall)
   bool any_image_ = false;
+  bool ambient_inlet_ = false;
 
   double interpolateFields(ParticleSet<D>& p, Index w, std::span<const Neighbour<D>> fluid) const;
   void imageParticle(const RhsContext<D>& ctx, const NeighbourList<D>& list, Index w);

@@ -18,6 +18,14 @@
 // inlet plane is released into the fluid (a new moving particle, a new id, the buffer
 // particle's position, velocity, density and fields) and the buffer particle jumps back by
 // the buffer depth, so each lane keeps its lattice spacing and feeds at its own rate.
+// velocity = "extrapolated" instead: each lane of the buffer (a row along the flow) carries the
+// mean velocity of the fluid in its lane within two spacings downstream of the inlet (a
+// zero-gradient inlet) and moves so that its leading particle stays one spacing behind the
+// lane's most upstream fluid particle (attached to the fluid, never backwards); its particles
+// then take the ambient pressure (that of rho0: a pressure inlet, which pins the pressure level
+// that a zero-gradient velocity leaves free), for flows driven by the scene itself: the thesis' die swell, where a body force
+// acts only inside the die (§4.4; effects.body_force.region_min/max) and the inlet takes in
+// whatever the die flow carries.
 // For the fluid the buffer is a wall with a Dirichlet velocity: its particles carry their own
 // velocity into the viscous term (no Adami mirror) and the pressure and stresses are
 // extrapolated from the fluid like those of dummy walls (a zero-gradient condition,
@@ -29,6 +37,7 @@
 //
 // Mass accounting: released - removed = change of the fluid particle count, in the
 // diagnostics (columns released, removed, fluid_particles) and summary.json (flow{...}).
+#include <array>
 #include <memory>
 #include <vector>
 
@@ -58,6 +67,7 @@ class InflowOutflow final : public StepHook<D> {
   std::string describe() const override;
 
   bool hasInflow() const { return !buffer_.empty(); }
+  bool extrapolatedVelocity() const { return extrapolated_; }
   // The buffer's speed factor at time t (the ramp) and its integral from 0 to t.
   double rampFactor(double t) const;
   double rampIntegral(double t) const;
@@ -72,6 +82,18 @@ class InflowOutflow final : public StepHook<D> {
   double depth_ = 0;                 // buffer depth along the flow, m
   double mean_velocity_ = 0, width_ = 0, ramp_time_ = 0;
   std::string profile_;
+  // velocity = "extrapolated": each lane (a row of the buffer along the flow) moves with the
+  // mean velocity of the fluid just downstream of the inlet in that lane.
+  bool extrapolated_ = false;
+  double spacing_ = 0;
+  Vec<D> lo_ = Vec<D>::Zero();
+  std::array<long, D> counts_{};
+  std::vector<long> lane_;  // per buffer particle
+  std::vector<double> lane_speed_, lane_sum_, lane_trail_, lane_lead_, lane_shift_;
+  std::vector<long> lane_count_;
+  double support_ = 0;
+  long laneOf(const Vec<D>& x) const;
+  void followFluid(ParticleSet<D>& p, const double* y, std::size_t n_moving);
   // Outflow.
   bool outflow_ = false;
   int out_axis_ = 0;
