@@ -125,7 +125,11 @@ int listAll() {
   std::cout << "boundaries:\n"
             << "  dummy_walls          [[blocks]] of kind \"wall\": fixed particle layers, no-slip (Adami et al. 2012)\n"
             << "  image walls          [[blocks]] of kind \"wall\" with treatment = \"image\": boundary + image particles\n"
-            << "                       (Fang et al. 2006 eqs. 46-48; normal, extrapolation = \"fang\" | \"centroid\")\n";
+            << "                       (Fang et al. 2006 eqs. 46-48; normal, extrapolation = \"fang\" | \"centroid\")\n"
+            << "  inflow               [inflow]: a buffer of fixed particles (kind 3) feeding fluid through an inlet plane;\n"
+            << "                       velocity = \"prescribed\" (profile uniform | parabolic, mean_velocity, ramp_time)\n"
+            << "                       or \"extrapolated\" (follows the fluid, ambient pressure: body-force feeds)\n"
+            << "  outflow              [outflow]: fluid particles past a plane (normal, position) are removed\n";
   return 0;
 }
 

@@ -147,10 +147,16 @@ class SecondOrderFluid final : public PairEffect<D, SecondOrderFluid<D>> {
       throw InputError(proc + " takes the divergence of the stress by thesis eq. 3.18: add [effects.stress_divergence]");
     if (procedure_ == 4 && divergence)
       throw InputError(proc + " computes div(T) itself from the velocity derivatives: remove [effects.stress_divergence]");
-    const std::string_view wanted = procedure_ == 1 ? "symmetric" : "difference";
-    if (pressure && pressure->form() != wanted)
-      throw InputError(proc + " takes grad(p) by thesis eq. " + (procedure_ == 1 ? "3.18" : "3.16") +
-                       ": set effects.pressure_gradient.form = \"" + std::string(wanted) + "\"");
+    // Case 1 takes p inside the total stress, so grad(p) is eq. 3.18 (symmetric). Cases 2-4 take
+    // it by eq. 3.16 ("difference"); the momentum-conserving eq. 3.18 ("symmetric") is accepted
+    // as well: at a die exit the difference form does not push the fluid out of the corner
+    // (missing neighbours contribute nothing) and the density there diverges within a
+    // millisecond (docs/studies.md, die swell).
+    if (pressure && procedure_ == 1 && pressure->form() != "symmetric")
+      throw InputError(proc + " takes grad(p) by thesis eq. 3.18: set effects.pressure_gradient.form = \"symmetric\"");
+    if (pressure && procedure_ != 1 && pressure->form() != "difference" && pressure->form() != "symmetric")
+      throw InputError(proc + " takes grad(p) by thesis eq. 3.16 (or the symmetric eq. 3.18): set "
+                       "effects.pressure_gradient.form = \"difference\" or \"symmetric\"");
 
     extra_ = &s.particles.fields.require("extra_stress", symmetricComponents<D>());
     extra_->extrapolated_to_walls = true;

@@ -54,6 +54,9 @@ sed -e '/^\[effects.viscosity\]/d' -e 's/^procedure = 3/procedure = 1/' "$SOF" >
 expect 2 "procedure = 1 .*form = \"symmetric\"" -- "$VESPH" check "$WORK/procedure1.toml"
 expect 0 "" -- "$VESPH" check "$WORK/procedure1.toml" --set 'effects.pressure_gradient.form="symmetric"'
 expect 2 "procedure = 3 .*add \[effects.viscosity\]" -- "$VESPH" check "$WORK/procedure1.toml" --set effects.second_order_fluid.procedure=3
+# Cases 2-4 take grad(p) by eq. 3.16 or the symmetric eq. 3.18 (stable at a die exit), nothing else
+expect 0 "" -- "$VESPH" check "$SOF" --set 'effects.pressure_gradient.form="symmetric"'
+expect 2 "procedure = 3 .*form = \"difference\" or \"symmetric\"" -- "$VESPH" check "$SOF" --set 'effects.pressure_gradient.form="renormalised"'
 expect 2 "1, 2, 3 or 4" -- "$VESPH" check "$SOF" --set effects.second_order_fluid.procedure=5
 expect 2 "derivative" -- "$VESPH" check "$SOF" --set 'effects.second_order_fluid.derivative="upper"'
 finish
