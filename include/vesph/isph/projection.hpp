@@ -95,6 +95,12 @@ class Projection final : public StepHook<D> {
   bool changesState() const override { return true; }
   void start(SphSystem<D>& system, double t, double* y) override;
   void apply(SphSystem<D>& system, double t, double dt, double* y) override;
+  // The incremental form keeps the last pressure per particle: it follows the particles when
+  // an inflow or outflow changes the set (a released particle starts from its buffer
+  // particle's pressure).
+  void resized(SphSystem<D>& system, const ParticleRemap& remap) override {
+    if (previous_pressure_.size() == remap.old_size) remap.apply(previous_pressure_, 1, Field::Range::all);
+  }
   std::vector<std::string> diagnosticsColumns() const override;
   void diagnostics(std::vector<double>& values) const override;
   void summarize(nlohmann::json& summary) const override;
