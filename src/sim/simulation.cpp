@@ -103,19 +103,27 @@ Simulation<D>::Simulation(Config& config, const SceneHeader& header) : config_(c
       if (w.image)
         throw InputError(config_.file() + ": blocks: treatment = \"image\" walls are not implemented with solver.scheme = "
                          "\"isph\" (the projection extrapolates the wall pressure as for dummy layers); use treatment = \"dummy\"");
-    // Not yet: a prescribed inflow is a velocity inlet, for the pressure Poisson equation a
-    // Neumann boundary like a wall, but the open ISPH channel (prescribed buffer, outflow as a
-    // free surface) diverged within 34 steps; the projection's state follows a resize already
-    // (Projection::resized).
-    if (flow)
-      throw InputError(config_.file() + ": inflow/outflow are not implemented with solver.scheme = \"isph\" yet; "
-                       "use scheme = \"wcsph\"");
+    // A prescribed inflow is a velocity inlet: for the pressure Poisson equation a Neumann
+    // boundary like a wall, with the buffer's velocity in the divergence. The extrapolated
+    // (pressure) inlet would need a Dirichlet pressure on the buffer, which the projection does
+    // not have. Open ends need p = 0 on the particles with a cut support (free-surface
+    // detection): without it the open channel diverged within 34 steps.
+    if (flow && flow->extrapolatedVelocity())
+      throw InputError(config_.file() + ": inflow.velocity = \"extrapolated\" is not implemented with solver.scheme = \"isph\" "
+                       "(the projection takes the buffer as a Neumann boundary, right for a prescribed velocity only); "
+                       "use velocity = \"prescribed\" or scheme = \"wcsph\"");
+    if (flow && std::none_of(system_.effects.begin(), system_.effects.end(), [](const auto& e) { return e->name() == "free_surface"; }))
+      throw InputError(config_.file() + ": inflow/outflow with solver.scheme = \"isph\" need [effects.free_surface] "
+                       "(threshold = 0.97): the open ends are free surfaces with p = 0");
     system_.hooks.push_back(makeProjection<D>(solver));
   } else {
     for (const std::string& key : solver.keys())
       if (key != "scheme") solver.fail(key, "no " + key + " with scheme = \"wcsph\" (the linear-solver keys belong to scheme = \"isph\")");
   }
 
+  // A prescribed inflow knows the flow's speed: the velocity scale for default tolerances when
+  // no sound-speed rule gives one (ISPH scenes).
+  const double inflow_speed = flow ? flow->prescribedPeakSpeed() : 0.0;
   if (flow) system_.hooks.push_back(std::move(flow));  // after the projection (DESIGN.md hook order)
 
   // Time, integrator, output, checks.
@@ -151,6 +159,7 @@ Simulation<D>::Simulation(Config& config, const SceneHeader& header) : config_(c
     scales.velocity = m->designVelocity() > 0 ? m->designVelocity() : 0.1 * m->soundSpeed();
     if (m->designLength() > 0) length = m->designLength();
   }
+  if (!(scales.velocity > 0)) scales.velocity = inflow_speed;
   for (const auto& e : system_.effects) scales.stress = std::max(scales.stress, e->stressScale(scales.velocity, length));
   ConfigTable integ = root.table("integrator");
   integrator_ = makeIntegrator(integ, scales, scheme_ == "isph" ? 0.175 : 0.125);

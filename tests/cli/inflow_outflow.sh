@@ -25,6 +25,16 @@ for integ in leapfrog arkode; do
   $PY "$SRC/tools/inflow_check.py" "$WORK/bf-$integ/channel_open_body_force.h5" --profile-x 0.015 --mean-velocity 0.1 \
     --from 0.25 >"$WORK/bf-$integ.log" 2>&1 && pass || fail "body force, $integ: $(tail -8 "$WORK/bf-$integ.log")"
 done
+# ISPH (prescribed buffer = a Neumann velocity inlet, the outlet a free surface): the
+# projection's incremental pressure follows the particle changes. The accounting must be
+# exact; the profile (3.0 % in the wall rows at this resolution, validation.md §12) is recorded
+# there, not bounded here.
+I=$SRC/cases/channel_inflow_outflow_isph.toml
+for integ in leapfrog arkode; do
+  expect 0 "ok: finished" -- "$VESPH" run "$I" -o "$WORK/isph-$integ" --quiet --set time.end=0.2 --set "integrator.type=\"$integ\""
+  $PY "$SRC/tools/inflow_check.py" "$WORK/isph-$integ/channel_inflow_outflow_isph.h5" >"$WORK/isph-$integ.log" 2>&1 && pass ||
+    fail "isph, $integ: $(tail -5 "$WORK/isph-$integ.log")"
+done
 # scene errors
 expect 2 "inflow.mean_velocity: expected no mean_velocity with velocity = \"extrapolated\"" -- "$VESPH" check "$B" \
   --set 'inflow.mean_velocity=0.1'
@@ -35,5 +45,7 @@ expect 2 "inflow.max: expected a buffer at least one kernel support deep" -- "$V
 expect 2 "inflow.direction: expected a coordinate unit vector" -- "$VESPH" check "$C" --set 'inflow.direction=[1.0, 1.0]'
 expect 2 "outflow.position: expected an outflow plane inside the domain" -- "$VESPH" check "$C" --set 'outflow.position=0.035'
 expect 2 "inflow.profile: expected one of: uniform, parabolic" -- "$VESPH" check "$C" --set 'inflow.profile="plug"'
-expect 2 "inflow/outflow are not implemented with solver.scheme = \"isph\"" -- "$VESPH" check "$C" --set 'solver.scheme="isph"'
+expect 2 "inflow/outflow with solver.scheme = \"isph\" need \[effects.free_surface\]" -- "$VESPH" check "$C" --set 'solver.scheme="isph"'
+expect 2 "inflow.velocity = \"extrapolated\" is not implemented with solver.scheme = \"isph\"" -- "$VESPH" check "$B" \
+  --set 'solver.scheme="isph"'
 finish

@@ -68,6 +68,12 @@ class InflowOutflow final : public StepHook<D> {
 
   bool hasInflow() const { return !buffer_.empty(); }
   bool extrapolatedVelocity() const { return extrapolated_; }
+  // The largest prescribed buffer speed (1.5 U for the parabola, U uniform), m/s; 0 without
+  // a prescribed inflow.
+  double prescribedPeakSpeed() const {
+    if (buffer_.empty() || extrapolated_) return 0.0;
+    return profile_ == "parabolic" ? 1.5 * mean_velocity_ : mean_velocity_;
+  }
   // The buffer's speed factor at time t (the ramp) and its integral from 0 to t.
   double rampFactor(double t) const;
   double rampIntegral(double t) const;
