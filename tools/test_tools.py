@@ -458,6 +458,25 @@ def expect(cond, msg, out=""):
         raise AssertionError(msg + ("\n----- output -----\n" + out if out else ""))
 
 
+def expect_unreadable_files_fail(script, d, not_vesph_attrs, prefix=""):
+    """The errors every file-reading tool gives, exit 1: a missing file, a text file, and an
+    HDF5 file with the given root attributes that is not a vesph output. With prefix, the
+    missing file's message must also carry it (e.g. 'die_swell_measure: error:')."""
+    rc, out, err = tool(script, os.path.join(d, "missing.h5"))
+    expect(rc == 1 and prefix in err and "no such file" in err, f"missing file: exit {rc}", out + err)
+    txt = os.path.join(d, "text.h5")
+    with open(txt, "w") as fh:
+        fh.write("not hdf5\n")
+    rc, out, err = tool(script, txt)
+    expect(rc == 1 and "not an HDF5 file" in err, f"text file: exit {rc}", out + err)
+    plain = os.path.join(d, "notvesph.h5")
+    with h5py.File(plain, "w") as f:
+        for k, v in not_vesph_attrs.items():
+            f.attrs[k] = v
+    rc, out, err = tool(script, plain)
+    expect(rc == 1 and "not a vesph output" in err, f"not vesph: exit {rc}", out + err)
+
+
 # -------------------------------------------------------------------- tests
 def make_tests(tmp):
     T = []
@@ -1472,18 +1491,7 @@ def make_drop_tests(tmp):
 
     @t
     def drop_errors():
-        rc, out, err = tool("drop_measure.py", os.path.join(d, "missing.h5"))
-        expect(rc == 1 and "no such file" in err, f"missing: exit {rc}", out + err)
-        txt = os.path.join(d, "text.h5")
-        with open(txt, "w") as fh:
-            fh.write("not hdf5\n")
-        rc, out, err = tool("drop_measure.py", txt)
-        expect(rc == 1 and "not an HDF5 file" in err, f"text: exit {rc}", out + err)
-        plain = os.path.join(d, "plain.h5")
-        with h5py.File(plain, "w") as f:
-            f.attrs["dim"] = 2
-        rc, out, err = tool("drop_measure.py", plain)
-        expect(rc == 1 and "not a vesph output" in err, f"plain: exit {rc}", out + err)
+        expect_unreadable_files_fail("drop_measure.py", d, {"dim": 2})
         box = write_drop(os.path.join(d, "box.h5"), [(0.0, disk)], scene=drop_scene(shape="box"))
         rc, out, err = tool("drop_measure.py", box)
         expect(rc == 1 and "no disk fluid block" in err, f"box: exit {rc}", out + err)
@@ -1762,19 +1770,8 @@ def make_die_swell_tests(tmp):
                and res["json"]["average"]["mean"] is None, f"short run: exit {rc}", out + err)
 
     def bad_input():
-        rc, out, err = tool("die_swell_measure.py", os.path.join(d, "missing.h5"))
-        expect(rc == 1 and "die_swell_measure: error:" in err and "no such file" in err,
-               f"missing file: exit {rc}", out + err)
-        txt = os.path.join(d, "text.h5")
-        with open(txt, "w") as fh:
-            fh.write("not hdf5\n")
-        rc, out, err = tool("die_swell_measure.py", txt)
-        expect(rc == 1 and "not an HDF5 file" in err, f"text file: exit {rc}", out + err)
-        notv = os.path.join(d, "notvesph.h5")
-        with h5py.File(notv, "w") as f:
-            f.attrs["format"] = "other"
-        rc, out, err = tool("die_swell_measure.py", notv)
-        expect(rc == 1 and "not a vesph output" in err, f"not vesph: exit {rc}", out + err)
+        expect_unreadable_files_fail("die_swell_measure.py", d, {"format": "other"},
+                                     prefix="die_swell_measure: error:")
         nof = write_die_swell(os.path.join(d, "noframes.h5"), frames=False)
         rc, out, err = tool("die_swell_measure.py", nof)
         expect(rc == 1 and "no /frames" in err, f"no frames: exit {rc}", out + err)

@@ -82,14 +82,6 @@ void DummyWalls<D>::update(const RhsContext<D>& ctx, const NeighbourList<D>& lis
     // pressure without the hydrostatic term (a zero-gradient inlet: a wall's term would balance
     // the body force at the inlet and hold the fluid back like a wall does).
     const bool inflow = p.kind[w] == static_cast<std::uint8_t>(ParticleKind::inflow);
-    double sumW = 0, sum_p = 0, sum_rho_gr = 0;
-    Vec<D> sum_v = Vec<D>::Zero();
-    for (const Neighbour<D>& nb : fluid) {
-      sumW += nb.W;
-      sum_v += nb.W * p.v(nb.j);
-      if (pres) sum_p += pres[nb.j] * nb.W;
-      if (!inflow) sum_rho_gr += p.density[nb.j] * g_.dot(nb.rij) * nb.W;  // rij = r_w - r_f
-    }
     double* out_v = wv + D * (w - n0);
     interpolateFields(p, w, fluid);
     if (inflow && ambient_inlet_) {  // a pressure inlet: the ambient pressure, rho0
@@ -98,7 +90,17 @@ void DummyWalls<D>::update(const RhsContext<D>& ctx, const NeighbourList<D>& lis
         p.density[w] = rho0_;
         pres[w] = model_->pressure(rho0_);
       }
-    } else if (sumW > 0) {
+      return;
+    }
+    double sumW = 0, sum_p = 0, sum_rho_gr = 0;
+    Vec<D> sum_v = Vec<D>::Zero();
+    for (const Neighbour<D>& nb : fluid) {
+      sumW += nb.W;
+      sum_v += nb.W * p.v(nb.j);
+      if (pres) sum_p += pres[nb.j] * nb.W;
+      if (!inflow) sum_rho_gr += p.density[nb.j] * g_.dot(nb.rij) * nb.W;  // rij = r_w - r_f
+    }
+    if (sumW > 0) {
       for (int a = 0; a < D; ++a) out_v[a] = inflow ? p.velocity[D * w + a] : 2.0 * p.velocity[D * w + a] - sum_v[a] / sumW;
       if (pres) {
         pres[w] = (sum_p + sum_rho_gr) / sumW;

@@ -4,26 +4,11 @@
 #include <limits>
 #include <numbers>
 #include <sstream>
+#include <tuple>
 
 #include "vesph/sim/system.hpp"
 
 namespace vesph {
-
-namespace {
-// A coordinate unit vector (the only directions a lattice box can face): its axis and sign.
-template <int D>
-void unitAxis(ConfigTable& t, std::string_view key, const Vec<D>& v, int& axis, double& sign) {
-  int nonzero = 0;
-  for (int a = 0; a < D; ++a)
-    if (v[a] != 0.0) {
-      ++nonzero;
-      axis = a;
-    }
-  if (nonzero != 1 || std::abs(std::abs(v[axis]) - 1.0) > 1e-12)
-    t.fail(key, "a coordinate unit vector, e.g. [1.0, 0.0] for +x");
-  sign = v[axis] > 0 ? 1.0 : -1.0;
-}
-}  // namespace
 
 template <int D>
 std::unique_ptr<InflowOutflow<D>> InflowOutflow<D>::fromConfig(ConfigTable& root, ParticleSet<D>& p,
@@ -36,7 +21,7 @@ std::unique_ptr<InflowOutflow<D>> InflowOutflow<D>::fromConfig(ConfigTable& root
     ConfigTable in = root.table("inflow", false);
     const Vec<D> lo = in.vector<D>("min", std::nullopt, "m");
     const Vec<D> hi = in.vector<D>("max", std::nullopt, "m");
-    unitAxis<D>(in, "direction", in.vector<D>("direction", std::nullopt), hook->axis_, hook->sign_);
+    std::tie(hook->axis_, hook->sign_) = in.coordinateAxis<D>("direction", "a coordinate unit vector, e.g. [1.0, 0.0] for +x");
     std::array<long, D> n;
     for (int a = 0; a < D; ++a) {
       const double cells = (hi[a] - lo[a]) / dx;
@@ -76,13 +61,12 @@ std::unique_ptr<InflowOutflow<D>> InflowOutflow<D>::fromConfig(ConfigTable& root
       hook->ramp_time_ = in.number("ramp_time", 0.0, Bound::nonnegative, "s");
     }
     int across = D == 2 ? 1 - ax : -1;
+    double width = 0;  // of the parabolic profile
     if (hook->profile_ == "parabolic") {
       if (D == 3 || in.has("profile_axis"))
         across = static_cast<int>(in.integer("profile_axis", D == 2 ? std::optional<long long>(1 - ax) : std::nullopt, 0, D - 1));
       if (across == ax) in.fail("profile_axis", "an axis across the flow direction (not the flow axis)");
-      hook->width_ = hi[across] - lo[across];
-    } else {
-      hook->width_ = D == 2 ? hi[1 - ax] - lo[1 - ax] : 0.0;
+      width = hi[across] - lo[across];
     }
     // The buffer particles: cell centres of the box, as for blocks (fixed, kind inflow).
     long total = 1;
@@ -97,7 +81,7 @@ std::unique_ptr<InflowOutflow<D>> InflowOutflow<D>::fromConfig(ConfigTable& root
       }
       double u = hook->extrapolated_ ? 0.0 : hook->mean_velocity_;
       if (hook->profile_ == "parabolic") {
-        const double eta = (x[across] - lo[across]) / hook->width_;
+        const double eta = (x[across] - lo[across]) / width;
         u = 6.0 * hook->mean_velocity_ * eta * (1.0 - eta);
       }
       Vec<D> v = Vec<D>::Zero();
@@ -111,7 +95,7 @@ std::unique_ptr<InflowOutflow<D>> InflowOutflow<D>::fromConfig(ConfigTable& root
   if (outflow) {
     ConfigTable out = root.table("outflow", false);
     hook->outflow_ = true;
-    unitAxis<D>(out, "normal", out.vector<D>("normal", std::nullopt), hook->out_axis_, hook->out_sign_);
+    std::tie(hook->out_axis_, hook->out_sign_) = out.coordinateAxis<D>("normal", "a coordinate unit vector, e.g. [1.0, 0.0] for +x");
     hook->out_position_ = out.number("position", std::nullopt, Bound::any, "m");
     const int a = hook->out_axis_;
     const double edge = hook->out_sign_ > 0 ? dom.hi[a] : dom.lo[a];

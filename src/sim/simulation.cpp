@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <random>
 #include <sstream>
+#include <tuple>
 
 #include "vesph/boundary/dummy_walls.hpp"
 #include "vesph/boundary/inflow_outflow.hpp"
@@ -237,17 +238,8 @@ void Simulation<D>::generateParticles(ConfigTable& root) {
       // wall surface plus image particles behind it (include/vesph/boundary/dummy_walls.hpp).
       box.image = b.choice("treatment", "dummy", {"dummy", "image"}) == "image";
       if (box.image) {
-        const Vec<D> nrm = b.vector<D>("normal", std::nullopt);
-        int axis = -1, nonzero = 0;
-        for (int a = 0; a < D; ++a)
-          if (nrm[a] != 0.0) {
-            ++nonzero;
-            axis = a;
-          }
-        if (nonzero != 1 || std::abs(std::abs(nrm[axis]) - 1.0) > 1e-12)
-          b.fail("normal", "a coordinate unit vector pointing from the wall into the fluid, e.g. [0.0, 1.0] for a floor");
-        box.normal_axis = axis;
-        box.normal_sign = nrm[axis] > 0 ? 1.0 : -1.0;
+        std::tie(box.normal_axis, box.normal_sign) = b.coordinateAxis<D>(
+            "normal", "a coordinate unit vector pointing from the wall into the fluid, e.g. [0.0, 1.0] for a floor");
         box.centroid = b.choice("extrapolation", "fang", {"fang", "centroid"}) == "centroid";
       }
     }

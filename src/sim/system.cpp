@@ -214,23 +214,17 @@ bool SphSystem<D>::afterStep(double t, double dt, double* y) {
 
 template <int D>
 bool SphSystem<D>::afterStepChangesState() const {
-  for (const auto& hk : hooks)
-    if (hk->changesState()) return true;
-  return false;
+  return anyHook(&StepHook<D>::changesState);
 }
 
 template <int D>
 bool SphSystem<D>::mayResize() const {
-  for (const auto& hk : hooks)
-    if (hk->changesParticles()) return true;
-  return false;
+  return anyHook(&StepHook<D>::changesParticles);
 }
 
 template <int D>
 bool SphSystem<D>::resizePending() const {
-  for (const auto& hk : hooks)
-    if (hk->pendingChanges()) return true;
-  return false;
+  return anyHook(&StepHook<D>::pendingChanges);
 }
 
 template <int D>
@@ -242,10 +236,8 @@ double* SphSystem<D>::resizeState(double t, double* y) {
   for (auto& hk : hooks) hk->collectChanges(*this, changes_);
   const std::size_t n = particles.n_moving;
   removed_flag_.assign(n, 0);
-  std::size_t removed_now = 0;
   for (Index i : changes_.remove) {
     if (i >= n) throw std::logic_error("a hook removes a fixed particle");
-    if (!removed_flag_[i]) ++removed_now;
     removed_flag_[i] = 1;
   }
   remap_.old_size = particles.size();
@@ -263,9 +255,6 @@ double* SphSystem<D>::resizeState(double t, double* y) {
   for (auto& e : effects) e->resized(particles, remap_);
   for (auto& b : boundaries) b->resized(remap_);
   for (auto& hk : hooks) hk->resized(*this, remap_);
-  released_ += changes_.release.size();
-  removed_ += removed_now;
-  ++resizes_;
   neighbours.update(particles, true);
   driver.prepare(neighbours);
   state_buffer->resize(size());

@@ -207,7 +207,6 @@ class ArkodeErk final : public Integrator {
     y_ = fresh;
     if (adaptive_) setTolerances();
     check(ERKStepSetStopTime(mem_, tout), "SetStopTime");
-    ++resizes_;
   }
 
   static void check(int flag, const char* what) {
@@ -264,7 +263,6 @@ class ArkodeErk final : public Integrator {
   double t_ = 0, t_last_accepted_ = 0;
   bool stop_requested_ = false;
   bool resizable_ = false;
-  std::uint64_t resizes_ = 0;
   std::string pending_error_;
 };
 

@@ -66,7 +66,6 @@ class InflowOutflow final : public StepHook<D> {
   void summarize(nlohmann::json& summary) const override;
   std::string describe() const override;
 
-  bool hasInflow() const { return !buffer_.empty(); }
   bool extrapolatedVelocity() const { return extrapolated_; }
   // The largest prescribed buffer speed (1.5 U for the parabola, U uniform), m/s; 0 without
   // a prescribed inflow.
@@ -86,7 +85,7 @@ class InflowOutflow final : public StepHook<D> {
   double sign_ = 1;
   double inlet_ = 0;                 // the inlet plane x[axis] = inlet
   double depth_ = 0;                 // buffer depth along the flow, m
-  double mean_velocity_ = 0, width_ = 0, ramp_time_ = 0;
+  double mean_velocity_ = 0, ramp_time_ = 0;
   std::string profile_;
   // velocity = "extrapolated": each lane (a row of the buffer along the flow) moves with the
   // mean velocity of the fluid just downstream of the inlet in that lane.

@@ -4,11 +4,13 @@
 // fully resolved scene), and remembers which keys were asked for; afterwards
 // Config::rejectUnknownKeys() reports any key nobody asked for, with the valid ones.
 // Errors are InputError with "FILE: KEY: expected ..., got ... (line N)".
+#include <cmath>
 #include <map>
 #include <optional>
 #include <set>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include <toml++/toml.h>
@@ -78,6 +80,21 @@ class ConfigTable {
     Vec<D> out;
     for (int a = 0; a < D; ++a) out[a] = v[a];
     return out;
+  }
+
+  // A required coordinate unit vector +-e_axis (the only directions a lattice box can face):
+  // returns {axis, sign}; otherwise fails with `expected`.
+  template <int D>
+  std::pair<int, double> coordinateAxis(std::string_view key, const std::string& expected) {
+    const Vec<D> v = vector<D>(key, std::nullopt);
+    int axis = -1, nonzero = 0;
+    for (int a = 0; a < D; ++a)
+      if (v[a] != 0.0) {
+        ++nonzero;
+        axis = a;
+      }
+    if (nonzero != 1 || std::abs(std::abs(v[axis]) - 1.0) > 1e-12) fail(key, expected);
+    return {axis, v[axis] > 0 ? 1.0 : -1.0};
   }
 
   // A sub-table; with create, an absent one is created empty (so its defaults show up).

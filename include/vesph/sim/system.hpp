@@ -55,10 +55,6 @@ class SphSystem final : public OdeSystem {
   // Called after every particle-count change with the rewritten state (the Simulation's copy
   // of the last good state must follow it).
   std::function<void(double t, const double* y)> resize_observer;
-  // Particle-count bookkeeping (diagnostics, summary.json).
-  std::uint64_t released() const { return released_; }
-  std::uint64_t removed() const { return removed_; }
-  std::uint64_t resizes() const { return resizes_; }
 
   void pack(double* y) const;
   void unpack(const double* y);
@@ -79,10 +75,17 @@ class SphSystem final : public OdeSystem {
   Vec<D> body_acceleration_ = Vec<D>::Zero();
   double max_speed_ = 0, max_acceleration_ = 0;
   std::uint64_t rhs_evals_ = 0;
-  std::uint64_t next_id_ = 0, released_ = 0, removed_ = 0, resizes_ = 0;
+  std::uint64_t next_id_ = 0;
   ParticleChanges changes_;
   ParticleRemap remap_;
   std::vector<char> removed_flag_;
+  // Whether some hook answers true (hook is a StepHook member predicate).
+  template <class Pred>
+  bool anyHook(Pred pred) const {
+    for (const auto& hk : hooks)
+      if (((*hk).*pred)()) return true;
+    return false;
+  }
 };
 
 }  // namespace vesph
