@@ -6,7 +6,8 @@ profiles across the die, as CSV, JSON and PNG.
 Usage
 -----
     /usr/bin/python3 tools/die_swell_measure.py RUN.h5
-        [--stations 0.21 0.23 0.25] [--window 1.0] [--die-width 0.01] [--die-exit 0.2]
+        [--stations 0.21 0.23 0.25] [--window 1.0] [--filled-window 4] [--die-width 0.01]
+        [--die-exit 0.2]
         [--from T] [--expect-min R] [--expect-max R]
         [--profile-x 0.185] [--profile-time T] [--xlim 0.15 0.30]
         [--out-dir DIR] [--prefix NAME] [--no-png]
@@ -33,6 +34,20 @@ full of 25 particle rows (W = 25 dx) gives a width of 25 dx = W. The swell ratio
 width / W. It is NaN when fewer than 2 fluid particles are in the slab (the extrudate has not
 reached the station yet). The average is the mean of the stations' ratios, NaN unless all
 stations are defined. Walls (kind 1), dummies (2) and inflow buffer particles (3) are ignored.
+
+Filled width (every frame): the extrudate's volume per unit length
+--------------------------------------------------------------------
+The width above is the envelope: voids between separated particle lanes count as fluid. The
+filled width counts only what the particles hold: over the slab
+x_s - F dx/2 <= x < x_s + F dx/2 (--filled-window F, in dx, default 4; half-open, so that a
+lattice puts exactly F columns in it)
+
+    filled width = sum over its fluid particles of m_i / rho_i  /  (F dx)
+
+and the filled ratio is filled width / W (NaN with < 2 particles, or when the frames lack
+mass or density). For a compact extrudate it equals the envelope ratio (to the counting noise
+of the slab's edges); envelope - filled is the share of voids. In a steady extrudate moving
+as a plug at U_e it is Q / (U_e W), the swell of volume conservation.
 
 Steady value
 ------------
@@ -62,10 +77,11 @@ Checks on the input
 
 Outputs (in --out-dir, default the directory of the file; PREFIX defaults to the scene name)
 -------------------------------------------------------------------------------------------
-PREFIX_swell.csv     time_s, ratio_x<station> for each station, ratio_average (nan where
-                     undefined), one row per frame;
-PREFIX_summary.json  stations (x, mean, std, frames defined), average (mean, std,
-                     half_range, min, max), frames_used, time_window [first, last], the
+PREFIX_swell.csv     time_s, ratio_x<station> for each station, ratio_average, then
+                     filled_x<station> and filled_average (nan where undefined), one row
+                     per frame;
+PREFIX_summary.json  stations (x, mean, std, frames defined, filled_mean, filled_std),
+                     average (mean, std, half_range, min, max), filled (mean, std), frames_used, time_window [first, last], the
                      settings, and the checks' outcome (NaN written as null);
 PREFIX_profiles.csv  y_m, speed_m_s[, Txx_Pa, Tyy_Pa, Txy_Pa, N1_Pa];
 PREFIX_swell.png     ratio against time for each station and the average, the steady mean
@@ -155,6 +171,11 @@ class Run:
                 raise ToolError(f"{self.path}: frame {nm} has no dataset {ds!r}")
         out = {"kind": g["kind"][...], "position": g["position"][...]}
         n = len(out["kind"])
+        if "mass" in g and "density" in g:
+            m, rho = g["mass"][...], g["density"][...]
+            if m.shape == (n,) and rho.shape == (n,):
+                with np.errstate(divide="ignore", invalid="ignore"):
+                    out["volume"] = m / rho
         if out["position"].shape != (n, 2):
             raise ToolError(f"{self.path}: frame {nm}: position has shape "
                             f"{out['position'].shape}, expected ({n}, 2)")
@@ -202,18 +223,37 @@ def swell_ratio(pos, station, half, dx, W):
     return float((y.max() - y.min() + dx) / W), n
 
 
+def filled_ratio(pos, vol, station, half, W):
+    """Sum of the particle volumes in station - half <= x < station + half over 2 half W;
+    nan with < 2 particles or without volumes."""
+    if vol is None:
+        return float("nan")
+    m = (pos[:, 0] >= station - half * (1.0 + 1e-9)) & (pos[:, 0] < station + half * (1.0 - 1e-9))
+    if np.count_nonzero(m) < 2:
+        return float("nan")
+    return float(vol[m].sum() / (2.0 * half) / W)
+
+
+def mean_if_all(values):
+    return float(np.mean(values)) if all(math.isfinite(r) for r in values) else float("nan")
+
+
 def measure_swell(run, a):
-    """Rows: dicts time, ratios [per station], average."""
+    """Rows: dicts time, ratios [per station], average, filled [per station], filled_average."""
     rows = []
     half = 0.5 * a.window * run.dx
+    half_filled = 0.5 * a.filled_window * run.dx
     for k, (nm, t) in enumerate(run.frames):
         fr = read_frame(run, k)
         if fr is None:
             break
-        pos = fr["position"][fr["kind"] == 0]
+        fluid = fr["kind"] == 0
+        pos = fr["position"][fluid]
+        vol = fr["volume"][fluid] if "volume" in fr else None
         ratios = [swell_ratio(pos, xs, half, run.dx, a.die_width)[0] for xs in a.stations]
-        avg = float(np.mean(ratios)) if all(math.isfinite(r) for r in ratios) else float("nan")
-        rows.append({"frame": nm, "time": t, "ratios": ratios, "average": avg})
+        filled = [filled_ratio(pos, vol, xs, half_filled, a.die_width) for xs in a.stations]
+        rows.append({"frame": nm, "time": t, "ratios": ratios, "average": mean_if_all(ratios),
+                     "filled": filled, "filled_average": mean_if_all(filled)})
     return rows
 
 
@@ -230,18 +270,23 @@ def steady(rows, a):
     res = {"rule": rule, "frames_used": len(win),
            "time_window": [win[0]["time"], win[-1]["time"]] if win else [nan, nan],
            "mean": nan, "std": nan, "half_range": nan, "min": nan, "max": nan,
-           "stations": []}
+           "filled": {"mean": nan, "std": nan}, "stations": []}
     if win:
         v = np.array([r["average"] for r in win])
         res.update(mean=float(v.mean()), std=float(v.std()),
                    half_range=float(0.5 * (v.max() - v.min())),
                    min=float(v.min()), max=float(v.max()))
+        f = np.array([r["filled_average"] for r in win])
+        res["filled"] = {"mean": float(f.mean()), "std": float(f.std())}
     for j, xs in enumerate(a.stations):
         v = np.array([r["ratios"][j] for r in win])
+        f = np.array([r["filled"][j] for r in win])
         res["stations"].append({
             "x_m": xs, "mean": float(v.mean()) if len(v) else nan,
             "std": float(v.std()) if len(v) else nan,
-            "frames_defined": int(sum(math.isfinite(r["ratios"][j]) for r in rows))})
+            "frames_defined": int(sum(math.isfinite(r["ratios"][j]) for r in rows)),
+            "filled_mean": float(f.mean()) if len(f) else nan,
+            "filled_std": float(f.std()) if len(f) else nan})
     return res
 
 
@@ -288,9 +333,11 @@ def station_header(xs):
 def write_swell_csv(path, rows, a):
     with open(path, "w", newline="") as fh:
         w = csv.writer(fh)
-        w.writerow(["time_s"] + [station_header(x) for x in a.stations] + ["ratio_average"])
+        w.writerow(["time_s"] + [station_header(x) for x in a.stations] + ["ratio_average"]
+                   + [f"filled_x{x:g}" for x in a.stations] + ["filled_average"])
         for r in rows:
-            w.writerow([fmt(r["time"])] + [fmt(v) for v in r["ratios"]] + [fmt(r["average"])])
+            w.writerow([fmt(r["time"])] + [fmt(v) for v in r["ratios"]] + [fmt(r["average"])]
+                       + [fmt(v) for v in r["filled"]] + [fmt(r["filled_average"])])
 
 
 def write_profiles_csv(path, prof, has_stress):
@@ -323,6 +370,8 @@ def plot_swell(png, rows, st, a, title):
     for j, xs in enumerate(a.stations):
         ax.plot(t, [r["ratios"][j] for r in rows], ".-", ms=3, lw=1, label=f"x = {xs:g} m")
     ax.plot(t, [r["average"] for r in rows], "k-", lw=2, label="average")
+    ax.plot(t, [r["filled_average"] for r in rows], "-", color="tab:purple", lw=2,
+            label="filled (void-free) average")
     if st["frames_used"]:
         ax.axhline(st["mean"], color="k", ls="--", lw=1,
                    label=f"steady mean {st['mean']:.4g} (std {st['std']:.2g})")
@@ -473,7 +522,8 @@ def run(a, out=sys.stdout):
             t0, t1 = st["time_window"]
             p(f"   steady swell ratio ({st['rule']}: {st['frames_used']} frames, "
               f"t = {t0:g} ... {t1:g} s): mean {st['mean']:.5g}, std {st['std']:.3g}, "
-              f"(max - min)/2 {st['half_range']:.3g}")
+              f"(max - min)/2 {st['half_range']:.3g}; filled (void-free) ratio: mean "
+              f"{st['filled']['mean']:.5g}, std {st['filled']['std']:.3g}")
         else:
             p(f"   steady swell ratio: no frame with a defined average ({st['rule']})")
         p(f"   profile at x = {a.profile_x:g} m, frame t = {a.prof_t:g} s: {len(prof)} "
@@ -515,6 +565,7 @@ def run(a, out=sys.stdout):
             "frames": len(rows),
             "stations": st["stations"],
             "average": {k2: st[k2] for k2 in ("mean", "std", "half_range", "min", "max")},
+            "filled": st["filled"], "filled_window_dx": a.filled_window,
             "frames_used": st["frames_used"], "time_window_s": st["time_window"],
             "from_s": a.from_time, "window_rule": st["rule"],
             "profile": {"x_m": a.profile_x, "time_s": a.prof_t, "particles": len(prof),
@@ -570,6 +621,9 @@ def main(argv=None):
     ap.add_argument("--window", type=float, default=1.0, metavar="N",
                     help="slab width at a station in units of dx: particles with "
                          "|x - x_s| <= N dx/2 (default 1)")
+    ap.add_argument("--filled-window", type=float, default=4.0, metavar="F",
+                    help="slab width of the filled (void-free) width in units of dx: "
+                         "x_s - F dx/2 <= x < x_s + F dx/2 (default 4)")
     ap.add_argument("--die-width", type=float, default=0.01, metavar="W",
                     help="die width W [m] (default 0.01)")
     ap.add_argument("--die-exit", type=float, default=0.2, metavar="X",
@@ -594,7 +648,8 @@ def main(argv=None):
                     help="file name prefix (default: the scene name)")
     ap.add_argument("--no-png", action="store_true", help="write the CSV and JSON files only")
     a = ap.parse_args(argv)
-    for nm, v in (("--window", a.window), ("--die-width", a.die_width)):
+    for nm, v in (("--window", a.window), ("--filled-window", a.filled_window),
+                  ("--die-width", a.die_width)):
         if not (math.isfinite(v) and v > 0):
             ap.error(f"{nm} must be a positive number, got {v:g}")
     for nm, v in [("--die-exit", a.die_exit), ("--profile-x", a.profile_x)] + [

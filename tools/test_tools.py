@@ -54,6 +54,11 @@ DIR/<name>.h5 + DIR/<name>.xdmf (XDMF 3 in the layout the C++ writer uses)
     stations (NaN before the extrudate arrives), the steady mean / std /
     half range, the profiles against the analytic fields, the PNGs,
     --expect-min/--expect-max and the bad-input errors and exit codes,
+  * die_swell_study.py: the scenes of every study (they read back from the
+    TOML written, the thesis resolution gives the base case's geometry, the
+    procedures' effect lists, the ISPH set-up, Table 4-1's Deborah numbers),
+    the tabulation of two synthetic runs (one finished and steady, one
+    diverged) and the bad-argument errors,
   * paraview_check.py (skipped when ParaView's Python modules are absent)
     reads the synthetic XDMF with the Xdmf3 reader.
 Prints one line per test and "N passed, M failed" at the end; exit status
@@ -1594,7 +1599,7 @@ DS_U, DS_VY = 0.05, 0.001                    # centreline velocity, uniform v_y 
 DS_A, DS_B, DS_C = 2.0e4, 30.0, -5.0e3       # T_xx = a y, T_yy = b, T_xy = c (y - W/2) [Pa]
 
 
-def ds_particles(front, rows_far, swell_len=0.01):
+def ds_particles(front, rows_far, swell_len=0.01, lane=1.0):
     """A die-swell-like frame: (position, kind). Die walls (kind 1): 3 rows below y = 0 and
     above y = W for x in [0, 0.2]; a floor row (kind 1) at y = -0.02 beyond the exit; inflow
     buffer (kind 3) at x < 0; fluid: 25 rows in the die (x < 0.2) and, for 0.2 < x < front, an
@@ -1613,7 +1618,7 @@ def ds_particles(front, rows_far, swell_len=0.01):
     xe = xe[xe < front]
     for x in xe:
         n = int(round(25 + (rows_far - 25) * min(1.0, (x - DS_EXIT) / swell_len)))
-        y = 0.5 * DS_W + (np.arange(n) - 0.5 * (n - 1)) * dx
+        y = 0.5 * DS_W + (np.arange(n) - 0.5 * (n - 1)) * dx * lane
         parts.append((np.column_stack([np.full(n, x), y]), 0))
     pos = np.vstack([q for q, _ in parts])
     kind = np.concatenate([np.full(len(q), k, np.uint8) for q, k in parts])
@@ -1628,7 +1633,7 @@ def ds_frames(stress=True):
     return spec
 
 
-def write_die_swell(path, stress=True, spec=None, scene=DS_SCENE, dim=2, frames=True):
+def write_die_swell(path, stress=True, spec=None, scene=DS_SCENE, dim=2, frames=True, lane=1.0):
     with h5py.File(path, "w") as f:
         f.attrs["format"] = "vesph-1"
         f.attrs["dim"] = np.int64(dim)
@@ -1637,7 +1642,7 @@ def write_die_swell(path, stress=True, spec=None, scene=DS_SCENE, dim=2, frames=
         if not frames:
             return path
         for i, (t, front, rows_far) in enumerate(spec or ds_frames()):
-            pos, kind = ds_particles(front, rows_far)
+            pos, kind = ds_particles(front, rows_far, lane=lane)
             n = len(kind)
             g = f.create_group(f"frames/{i:06d}")
             g.attrs["time"] = np.float64(t)
@@ -1689,7 +1694,8 @@ def make_die_swell_tests(tmp):
         rows = res["swell.csv"]
         expect(rc == 0 and len(rows) == 9, f"exit {rc}, {len(rows)} rows", out + err)
         cols = list(rows[0].keys())
-        expect(cols == ["time_s", "ratio_x0.21", "ratio_x0.23", "ratio_x0.25", "ratio_average"],
+        expect(cols == ["time_s", "ratio_x0.21", "ratio_x0.23", "ratio_x0.25", "ratio_average",
+                        "filled_x0.21", "filled_x0.23", "filled_x0.25", "filled_average"],
                f"columns {cols}")
         nan = lambda v: math.isnan(float(v))  # noqa: E731
         expect(all(nan(rows[0][c]) for c in cols[1:]), f"t = 0 should be all NaN: {rows[0]}")
@@ -1698,7 +1704,7 @@ def make_die_swell_tests(tmp):
         expect(abs(float(rows[2]["ratio_x0.23"]) - 1.2) <= tol and nan(rows[2]["ratio_x0.25"])
                and nan(rows[2]["ratio_average"]), f"t = 0.2: {rows[2]}")
         for r, n in zip(rows[3:], (29, 31, 30, 29, 31, 30)):
-            for c in cols[1:]:
+            for c in cols[1:]:   # compact lattice: the filled width is the envelope's
                 expect(abs(float(r[c]) - n * DS_DX / DS_W) <= 1e-9, f"t = {r['time_s']} {c}: "
                        f"{r[c]} != {n * DS_DX / DS_W}")
         js = res["json"]
@@ -1711,11 +1717,30 @@ def make_die_swell_tests(tmp):
         expect([s["frames_defined"] for s in st] == [8, 7, 6]
                and all(abs(s["mean"] - 1.2) < 1e-9 for s in st), f"stations {st}")
         expect("mean 1.2" in out, "steady mean not printed", out)
+        f = js["filled"]
+        expect(abs(f["mean"] - 1.2) < 1e-9 and abs(f["std"] - 0.04 * math.sqrt(2 / 3)) < 1e-9
+               and all(abs(s["filled_mean"] - 1.2) < 1e-9 for s in st), f"filled {f} {st}")
         # --from: all six full frames; a wider slab sees the same width
         rc, out, err, res = measure(ve, "--from", "0.3", "--window", "3", "--no-png")
         a = res["json"]["average"]
         expect(rc == 0 and res["json"]["frames_used"] == 6 and abs(a["mean"] - 1.2) < 1e-9,
                f"--from 0.3: exit {rc}, {res.get('json')}", out + err)
+
+    def voids_between_lanes():
+        # The extrudate's rows two dx apart (lanes with voids between them): 15 rows span
+        # 29 dx, envelope ratio 29/25 = 1.16, filled ratio 15/25 = 0.6.
+        lanes = write_die_swell(os.path.join(d, "lanes.h5"), lane=2.0,
+                                spec=[(0.0, 0.2, 15), (0.1, 0.26, 15), (0.2, 0.26, 15)])
+        rc, out, err, res = measure(lanes, "--no-png")
+        r = res["swell.csv"][-1]
+        # (at 0.21 m one of the slab's four columns is in the swelling stretch: 16 rows)
+        expect(rc == 0 and abs(float(r["ratio_average"]) - 1.16) < 1e-9
+               and abs(float(r["filled_x0.23"]) - 0.6) < 1e-9
+               and abs(float(r["filled_x0.25"]) - 0.6) < 1e-9
+               and abs(float(r["filled_x0.21"]) - 61 / 100) < 1e-9,
+               f"lanes: envelope {r.get('ratio_average')}, filled {r}", out + err)
+        rc, out, err, res = measure(lanes, "--filled-window", "0", "--no-png")
+        expect(rc == 2 and "--filled-window" in err, f"--filled-window 0: exit {rc}", out + err)
 
     def profiles_with_stress_and_pngs():
         rc, out, err, res = measure(ve, "--expect-min", "1.15", "--expect-max", "1.25")
@@ -1795,12 +1820,108 @@ def make_die_swell_tests(tmp):
 
     return [("die_swell_measure: swell ratio per station, NaN before arrival, steady stats",
              swell_ratio_and_steady),
+            ("die_swell_measure: filled (void-free) width of separated lanes", voids_between_lanes),
             ("die_swell_measure: analytic stress/velocity profiles, PNGs, --profile-time",
              profiles_with_stress_and_pngs),
             ("die_swell_measure: Newtonian run without extra_stress, default prefix",
              newtonian_velocity_only),
             ("die_swell_measure: --expect-min/--expect-max failures", expect_checks_fail),
             ("die_swell_measure: bad input errors and exit codes", bad_input)]
+
+
+def make_die_swell_study_tests(tmp):
+    import tomllib
+    import die_swell_study as dss
+
+    d = os.path.join(tmp, "die_swell_study")
+    os.makedirs(d, exist_ok=True)
+
+    def scenes():
+        with open(dss.BASE_CASE, "rb") as fh:
+            base = tomllib.load(fh)
+        for study in dss.STUDIES:
+            for r in dss.study_runs(study):
+                for n in (10, 25):
+                    s = dss.scene_for(r, n)
+                    back = tomllib.loads(dss.toml_dumps(s))
+                    expect(back == s, f"{study}/{r.label}: the TOML text does not read back")
+                    expect(s["effects"]["second_order_fluid"]["alpha2"] == dss.g6(-0.1 * r.alpha1),
+                           f"{r.label}: alpha2 != -0.1 alpha1")
+                    expect(abs(s["inflow"]["mean_velocity"] - r.v / 1.5) < 1e-6 * r.v,
+                           f"{r.label}: mean velocity != v/1.5")
+                    e = s["effects"]
+                    expect(("viscosity" in e) == (r.procedure == 3)
+                           and ("stress_divergence" in e) == (r.procedure != 4),
+                           f"{r.label}: procedure {r.procedure} has the wrong effects: {sorted(e)}")
+                    isph = r.scheme == "isph"
+                    expect(("equation_of_state" not in e and "continuity" not in e
+                            and s.get("solver", {}).get("scheme") == "isph") if isph
+                           else "solver" not in s and e["equation_of_state"]["sound_speed"] >= 120.0,
+                           f"{r.label}: scheme {r.scheme} not set up")
+                    if n == 25:    # the thesis resolution: the base case's geometry exactly
+                        for k in range(3):
+                            for key in ("min", "max"):
+                                expect(np.allclose(s["blocks"][k][key], base["blocks"][k][key],
+                                                   atol=1e-12),
+                                       f"{r.label}: blocks[{k}].{key} {s['blocks'][k][key]} != "
+                                       f"the base case's {base['blocks'][k][key]}")
+                        for key in ("min", "max"):
+                            expect(np.allclose(s["inflow"][key], base["inflow"][key], atol=1e-12),
+                                   f"{r.label}: inflow.{key} differs from the base case")
+        de = {v: sorted(round(r.De, 9) for r in dss.study_runs("deborah") if r.v == v)
+              for v in (5.0, 10.0)}
+        expect(de == {5.0: [0, 0.02, 0.1, 0.2, 0.3], 10.0: [0, 0.02, 0.1, 0.2, 0.3, 0.4, 0.5]},
+               f"Deborah numbers of Table 4-1: {de}")
+        front = [r for r in dss.study_runs("frontier") if r.v == 10.0]
+        expect(max(r.De for r in front) >= 1.0 and {r.integrator for r in front} == {"leapfrog", "arkode"},
+               "the frontier study reaches De >= 1 at Re 10 under both integrators")
+        rc, out, err = tool("die_swell_study.py", "procedures", "--dry-run", "--out", d)
+        expect(rc == 0 and out.count(" run ") == 4
+               and os.path.exists(os.path.join(d, "procedures", "case4", "case4.toml")),
+               f"--dry-run: exit {rc}", out + err)
+
+    def tabulation():
+        # Two runs of the wsph_isph study with synthetic outputs: one finished (the synthetic
+        # extrudate swells to 29, 31, 30 rows of 25 over the later half: mean 1.2, std 0.033,
+        # one piece), one stopped as diverged.
+        sd = os.path.join(d, "tab")
+        for label, status in (("wcsph", "ok"), ("isph", "diverged")):
+            rd = os.path.join(sd, "wsph_isph", label)
+            os.makedirs(rd, exist_ok=True)
+            write_die_swell(os.path.join(rd, label + ".h5"))
+            with open(os.path.join(rd, "summary.json"), "w") as fh:
+                json.dump({"status": status, "final_time": 0.8, "steps": 800,
+                           "wall_seconds": 2.5, "message": "density deviation 0.6"}, fh)
+        rc, out, err = tool("die_swell_study.py", "wsph_isph", "--measure-only", "--out", sd,
+                            "--no-png")
+        expect(rc == 0, f"--measure-only: exit {rc}", out + err)
+        rows = {r["label"]: r for r in read_csv_rows(os.path.join(sd, "wsph_isph", "wsph_isph.csv"))}
+        w, i = rows["wcsph"], rows["isph"]
+        expect(abs(float(w["swell_mean"]) - 1.2) < 1e-9 and abs(float(w["swell_std"]) - 0.0326599) < 1e-6,
+               f"swell mean/std {w['swell_mean']} {w['swell_std']}, expected 1.2, 0.03266", out)
+        expect(w["clusters"] == "1" and w["detached"] == "0" and w["stable"] == "True"
+               and w["exit_status"] == "0" and w["thesis_swell"] == "1.362",
+               f"finished run: {w}", out)
+        expect(i["exit_status"] == "3" and i["stable"] == "False" and "density" in i["message"],
+               f"diverged run: {i}", out)
+        expect(out.count("NO") >= 1 and "wcsph" in out, "the printed table", out)
+
+    def bad_arguments():
+        rc, out, err = tool("die_swell_study.py", "forms", "--only", "nosuch", "--dry-run",
+                            "--out", d)
+        expect(rc == 2 and "nosuch" in err, f"--only nosuch: exit {rc}", out + err)
+        rc, out, err = tool("die_swell_study.py", "forms", "--across", "3", "--dry-run")
+        expect(rc == 2 and "--across" in err, f"--across 3: exit {rc}", out + err)
+        rc, out, err = tool("die_swell_study.py", "nosuch")
+        expect(rc == 2, f"unknown study: exit {rc}", out + err)
+        rc, out, err = tool("die_swell_study.py", "forms", "--vesph", "/nonexistent/vesph",
+                            "--out", d)
+        expect(rc == 2 and "no such executable" in err, f"missing vesph: exit {rc}", out + err)
+
+    return [("die_swell_study: scenes of every study (TOML round trip, thesis geometry at 25 "
+             "across, procedures' effects, ISPH, Table 4-1 De)", scenes),
+            ("die_swell_study: --measure-only tabulation, stable and diverged runs", tabulation),
+            ("die_swell_study: bad arguments", bad_arguments)]
 
 
 def main():
@@ -1819,7 +1940,8 @@ def main():
     r = Runner()
     try:
         for name, fn in (make_tests(tmp) + make_xpp_tests(tmp) + make_drop_tests(tmp)
-                         + make_hydrostatic_tests(tmp) + make_die_swell_tests(tmp)):
+                         + make_hydrostatic_tests(tmp) + make_die_swell_tests(tmp)
+                         + make_die_swell_study_tests(tmp)):
             r.run(name, fn)
     finally:
         if not a.keep:

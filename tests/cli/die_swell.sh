@@ -17,4 +17,16 @@ $PY "$SRC/tools/inflow_check.py" "$H5" >"$WORK/acc.log" 2>&1 && pass || fail "ac
 grep -q '"released": [1-9]' "$WORK/ds/summary.json" && pass || fail "no particles released: $(grep -A6 flow "$WORK/ds/summary.json")"
 $PY "$SRC/tools/die_swell_measure.py" "$H5" --out-dir "$WORK/m" --no-png --stations 0.21 0.22 --from 0.08 \
   --expect-min 1.0 --expect-max 1.5 >"$WORK/m.log" 2>&1 && pass || fail "swell ratio: $(tail -8 "$WORK/m.log")"
+# The studies' scenes (tools/die_swell_study.py, every study, at 10 and 25 across) are valid
+# scenes for this vesph: `vesph check` accepts each.
+for n in 10 25; do
+  $PY "$SRC/tools/die_swell_study.py" deborah contraction forms procedures wsph_isph frontier \
+    --dry-run --across $n --out "$WORK/study$n" >"$WORK/study.log" 2>&1 || fail "die_swell_study --dry-run: $(tail -3 "$WORK/study.log")"
+  count=0
+  for f in "$WORK"/study$n/*/*/*.toml; do
+    count=$((count + 1))
+    "$VESPH" check "$f" >/dev/null 2>"$WORK/check.err" && pass || fail "vesph check $f: $(tail -2 "$WORK/check.err")"
+  done
+  [ "$count" = 37 ] && pass || fail "die_swell_study wrote $count scenes at $n across, expected 37"
+done
 finish

@@ -1,0 +1,480 @@
+#!/usr/bin/python3
+"""Run the die-swell studies of the seed thesis (Ch. 4) with vesph and tabulate them: one
+command per study, each run a scene derived from cases/die_swell_second_order_fluid.toml.
+
+Usage
+-----
+    /usr/bin/python3 tools/die_swell_study.py STUDY [STUDY ...]
+        [--across N] [--jobs J] [--out DIR] [--vesph PATH] [--only LABEL ...]
+        [--dry-run] [--measure-only] [--no-png]
+
+STUDY is one of (thesis §4.4; v is the centreline velocity, De = |alpha1| v / (mu W),
+Re = rho W v / mu with rho = 1000 kg/m^3, mu = 10 Pa s, W = 0.01 m; alpha2 = -0.1 alpha1):
+
+  deborah      Table 4-1: Re = 5 (v = 5 m/s, alpha1 = 0, -4e-4, -2e-3, -4e-3, -6e-3) and
+               Re = 10 (v = 10 m/s, alpha1 = 0, -2e-4, -1e-3, -2e-3, -3e-3, -4e-3, -5e-3);
+               swell ratio against De (thesis Fig. 4-14)
+  contraction  §4.4.3: alpha1 = -4e-3 and +4e-3 at v = 9.5 m/s (De = 0.38)
+  forms        Fig. 4-6: Rivlin-Ericksen and CEF x the four convected derivatives at
+               v = 6.8 m/s, alpha1 = -4e-3 (De = 0.272)
+  procedures   §4.4.2: Case 1-4 at v = 3.4 m/s, alpha1 = -2.8e-3 (De = 0.0952)
+  wsph_isph    §4.4.6: WCSPH and ISPH at v = 6.8 m/s, alpha1 = -4e-3 (thesis 1.362, 1.355)
+  frontier     beyond §4.4.5's limits (De 0.3 at Re 5, 0.5 at Re 10): Re = 10 with
+               De = 0.75, 1.0, 1.5, 2.0 (leapfrog) and 1.0, 1.5 (adaptive ARKODE), Re = 5
+               with De = 0.4, 1.0 (leapfrog) and 1.0 (ARKODE)
+
+The feed is the prescribed fully developed profile (mean velocity v/1.5): the thesis tuned a
+body force F per run to reach v (its F values are listed in the table for reference); the
+prescribed feed sets v directly. Every run keeps the base case's momentum form (Rivlin-
+Ericksen, contravariant, procedure 3, symmetric grad p, quasi-steady DA/Dt), its stabilisers
+(delta-SPH 0.1, XSPH 0.5) and the leapfrog, unless the study varies them. The sound speed is
+c = 120 m/s * max(1, v / 6.8 m/s) (Mach <= 0.057); the run lasts 0.045 s * 6.8 / v (the
+front passes the last station after about a third of it; the forms and procedures studies
+run 0.6 of that), frames every 0.002 s * 6.8 / v.
+
+Resolution: --across N particles across the die (default 10; the thesis: 25), dx = W/N,
+h = 1.6 dx, five dummy layers and a five-column inflow buffer (support 4.8 dx); the die runs
+from x = 0.15 m to the exit at 0.2 m, the outflow plane at 0.30 m.
+
+Per run (in OUT/STUDY/LABEL/): the scene (LABEL.toml), the vesph output and log, and the
+files of tools/die_swell_measure.py. A run counts as stable when vesph finished (exit 0: no
+NaN, no particle out of the domain, density within the run's limits), the extrudate is one
+piece in the last frame (fluid particles with die exit - W <= x <= 0.28 m, linked at 1.5 dx:
+one cluster of >= 5 particles, no more than 5 particles detached), and the average swell
+ratio is defined over the later half of the run. Its fluctuation there (the standard
+deviation of the average, swell_std) is reported beside it: at 10 particles across one row
+is 0.1 of the ratio. Per study: OUT/STUDY/STUDY.csv (one row per run: the parameters, exit
+status, steps, wall time, steady swell mean/std per station and average, the filled
+(void-free) swell of die_swell_measure.py, clusters, detached particles, stable), and
+OUT/STUDY/STUDY.png.
+
+--dry-run writes the scenes and prints the commands without running them; --measure-only
+tabulates runs already present. --only LABEL restricts a study to the named runs.
+
+Exit status: 0 when every run was made (or tabulated); 1 when a run could not be measured
+at all (no output); 2 for bad arguments. An unstable run is a result, not an error.
+"""
+import argparse
+import concurrent.futures
+import copy
+import csv
+import json
+import math
+import os
+import shutil
+import subprocess
+import sys
+import time
+import tomllib
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(HERE)
+BASE_CASE = os.path.join(ROOT, "cases", "die_swell_second_order_fluid.toml")
+sys.path.insert(0, HERE)
+
+RHO, MU, W = 1000.0, 10.0, 0.01           # kg/m^3, Pa s, m (thesis §4.3)
+DIE_INLET, DIE_EXIT, OUTFLOW = 0.15, 0.2, 0.30
+
+
+def deborah(alpha1, v):
+    return abs(alpha1) * v / (MU * W)
+
+
+def reynolds(v):
+    return RHO * W * v / MU
+
+
+class Run:
+    """One run of a study: a label and its parameters."""
+
+    def __init__(self, label, v, alpha1, form="rivlin_ericksen", derivative="contravariant",
+                 procedure=3, scheme="wcsph", integrator="leapfrog", thesis_force=None,
+                 thesis_swell=None, duration=1.0):
+        self.label, self.v, self.alpha1 = label, v, alpha1
+        self.form, self.derivative, self.procedure = form, derivative, procedure
+        self.scheme, self.integrator = scheme, integrator
+        self.thesis_force, self.thesis_swell = thesis_force, thesis_swell
+        self.duration = duration      # the run lasts duration * 0.045 s * 6.8 / v
+
+    @property
+    def De(self):
+        return deborah(self.alpha1, self.v)
+
+    @property
+    def Re(self):
+        return reynolds(self.v)
+
+
+def study_runs(study):
+    if study == "deborah":
+        runs = []
+        for v, table in ((5.0, [(4100, 0.0), (3870, -4e-4), (2780, -2e-3), (1710, -4e-3),
+                                (1245, -6e-3)]),
+                         (10.0, [(8170, 0.0), (7410, -2e-4), (5670, -1e-3), (3720, -2e-3),
+                                 (2578, -3e-3), (1950, -4e-3), (1549, -5e-3)])):
+            for F, a1 in table:
+                runs.append(Run(f"re{v:g}_de{deborah(a1, v):g}", v, a1, thesis_force=F))
+        return runs
+    if study == "contraction":
+        return [Run("swell_a1_-4e-3", 9.5, -4e-3, thesis_force=18800),
+                Run("contract_a1_+4e-3", 9.5, 4e-3, thesis_force=200000)]
+    if study == "forms":
+        names = {("rivlin_ericksen", "contravariant"): "Ab", ("rivlin_ericksen", "covariant"): "Aa",
+                 ("rivlin_ericksen", "mixed"): "Am", ("rivlin_ericksen", "jaumann"): "Aj",
+                 ("cef", "contravariant"): "Cb", ("cef", "covariant"): "Ca",
+                 ("cef", "mixed"): "Cm", ("cef", "jaumann"): "Cj"}
+        # Shorter runs (0.6: to 0.027 s, the front past x = 0.25 m from about 0.014 s): the
+        # question is which forms swell, not the last digit of the swell.
+        return [Run(f"{form}_{d}", 6.8, -4e-3, form=form, derivative=d, thesis_force=18800,
+                    duration=0.6) for (form, d) in names]
+    if study == "procedures":
+        return [Run(f"case{k}", 3.4, -2.8e-3, procedure=k, duration=0.6) for k in (1, 2, 3, 4)]
+    if study == "wsph_isph":
+        return [Run("wcsph", 6.8, -4e-3, thesis_swell=1.362),
+                Run("isph", 6.8, -4e-3, scheme="isph", thesis_swell=1.355)]
+    if study == "frontier":
+        # The leapfrog at and beyond the thesis' limits; the adaptive ARKODE (several right-hand
+        # sides a step: the costlier runs) at De = 1 and beyond. De <= 0.5 (Re 10) and <= 0.3
+        # (Re 5) under the leapfrog are the deborah study's.
+        runs = []
+        for v, integ, des in ((10.0, "leapfrog", (0.75, 1.0, 1.5, 2.0)),
+                              (10.0, "arkode", (1.0, 1.5)),
+                              (5.0, "leapfrog", (0.4, 1.0)), (5.0, "arkode", (1.0,))):
+            for de in des:
+                runs.append(Run(f"re{v:g}_de{de:g}_{integ}", v, -de * MU * W / v, integrator=integ))
+        return runs
+    raise ValueError(study)
+
+
+STUDIES = ("deborah", "contraction", "forms", "procedures", "wsph_isph", "frontier")
+
+
+# ------------------------------------------------------------------------------ scenes
+def g6(x):
+    """x to six significant digits (readable scene files)."""
+    return float(f"{x:.6g}")
+
+
+def scene_for(run, across):
+    """The scene dict of a run: the base case with the run's parameters and resolution."""
+    with open(BASE_CASE, "rb") as fh:
+        s = tomllib.load(fh)
+    s = copy.deepcopy(s)
+    dx = W / across
+    depth = 5 * dx                       # >= the quintic support 3 h = 4.8 dx
+    s["name"] = run.label
+    s["particles"]["spacing"] = dx
+    s["domain"]["min"] = [DIE_INLET - depth - 2 * dx, -0.01]
+    fluid, lower, upper = s["blocks"]
+    fluid["min"], fluid["max"] = [DIE_INLET, 0.0], [DIE_EXIT, W]
+    lower["min"], lower["max"] = [DIE_INLET - depth, -depth], [DIE_EXIT, 0.0]
+    upper["min"], upper["max"] = [DIE_INLET - depth, W], [DIE_EXIT, W + depth]
+    inflow = s["inflow"]
+    inflow["min"], inflow["max"] = [DIE_INLET - depth, 0.0], [DIE_INLET, W]
+    scale = 6.8 / run.v
+    inflow["mean_velocity"] = g6(run.v / 1.5)
+    inflow["ramp_time"] = g6(0.005 * scale)
+    s["outflow"]["position"] = OUTFLOW
+    e = s["effects"]
+    sof = e["second_order_fluid"]
+    sof.update(form=run.form, derivative=run.derivative, alpha1=run.alpha1,
+               alpha2=g6(-0.1 * run.alpha1), procedure=run.procedure)
+    if run.procedure != 3:
+        del e["viscosity"]               # Case 1, 2, 4 carry tau = mu A in their own divergence
+    if run.procedure == 4:
+        del e["stress_divergence"]       # Case 4 computes div T from the velocity derivatives
+    e["equation_of_state"]["sound_speed"] = g6(120.0 * max(1.0, run.v / 6.8))
+    if run.scheme == "isph":
+        # Projection instead of the equation of state: no density evolution, no sound speed;
+        # p = 0 on the free surface needs its detection (docs/user-guide.md, [solver]).
+        for k in ("continuity", "equation_of_state", "density_diffusion"):
+            e.pop(k, None)
+        e["free_surface"] = {"threshold": 0.97}
+        # grad p by thesis eq. 3.16 (Case 3's own form): with p = 0 imposed on the free surface
+        # it holds the die exit; the symmetric eq. 3.18 that the WCSPH runs need there blows
+        # the ISPH die up at the exit within 3.5 ms (Newtonian too; docs/studies.md §5).
+        e["pressure_gradient"]["form"] = "difference"
+        s["solver"] = {"scheme": "isph", "linear_solver": "umfpack"}
+    s["integrator"] = {"type": run.integrator}
+    s["time"] = {"end": g6(0.045 * scale * run.duration)}
+    s["output"] = {"interval": g6(0.002 * scale)}
+    return s
+
+
+def toml_value(v):
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, (int, float)):
+        return repr(v)
+    if isinstance(v, str):
+        return json.dumps(v)
+    if isinstance(v, list):
+        return "[" + ", ".join(toml_value(x) for x in v) + "]"
+    raise TypeError(f"no TOML form for {v!r}")
+
+
+def toml_dumps(table, prefix=""):
+    """The subset of TOML the scenes use: scalars, arrays, tables, arrays of tables."""
+    out = []
+    for k, v in table.items():
+        if not isinstance(v, dict) and not (isinstance(v, list) and v and isinstance(v[0], dict)):
+            out.append(f"{k} = {toml_value(v)}")
+    for k, v in table.items():
+        name = f"{prefix}{k}"
+        if isinstance(v, dict):
+            if any(not isinstance(x, dict) for x in v.values()) or not v:
+                out.append(f"\n[{name}]")
+            out.append(toml_dumps(v, name + "."))
+        elif isinstance(v, list) and v and isinstance(v[0], dict):
+            for item in v:
+                out.append(f"\n[[{name}]]")
+                out.append(toml_dumps(item, name + "."))
+    return "\n".join(x for x in out if x != "")
+
+
+# ------------------------------------------------------------------------------ running
+def run_one(run, d, vesph):
+    """Run vesph on d/LABEL.toml; returns (exit status, wall time s). The log is d/run.log."""
+    t0 = time.time()
+    with open(os.path.join(d, "run.log"), "w") as log:
+        rc = subprocess.call([vesph, "run", os.path.join(d, run.label + ".toml"), "-o", d,
+                              "--quiet"], stdout=log, stderr=subprocess.STDOUT)
+    return rc, time.time() - t0
+
+
+def extrudate_clusters(h5):
+    """(clusters of >= 5 particles, detached particles) of the last frame's extrudate."""
+    import numpy as np
+    from drop_measure import clusters
+    import die_swell_measure as dsm
+
+    r = dsm.Run(h5)
+    try:
+        k = len(r.frames) - 1
+        fr = dsm.read_frame(r, k)
+        if fr is None and k > 0:
+            fr = dsm.read_frame(r, k - 1)
+        pos = fr["position"][fr["kind"] == 0]
+        m = (pos[:, 0] >= DIE_EXIT - W) & (pos[:, 0] <= 0.28)
+        n, detached, _, _ = clusters(pos[m], 1.5 * r.dx, 5)
+        return n, detached
+    finally:
+        r.close()
+
+
+def measure(run, d, rc, wall):
+    h5 = os.path.join(d, run.label + ".h5")
+    row = {"label": run.label, "v_m_s": run.v, "Re": run.Re, "De": round(run.De, 6),
+           "alpha1_Pa_s2": run.alpha1, "alpha2_Pa_s2": -0.1 * run.alpha1, "form": run.form,
+           "derivative": run.derivative, "procedure": run.procedure, "scheme": run.scheme,
+           "integrator": run.integrator, "thesis_force_N_kg": run.thesis_force,
+           "thesis_swell": run.thesis_swell, "exit_status": rc, "status": "",
+           "end_time_s": math.nan, "steps": math.nan, "wall_s": round(wall, 1),
+           "stable": False}
+    summ = os.path.join(d, "summary.json")
+    if os.path.exists(summ):
+        with open(summ) as fh:
+            js = json.load(fh)
+        row["status"] = js.get("status", "")
+        row["end_time_s"] = js.get("final_time", math.nan)
+        row["steps"] = js.get("steps", math.nan)
+        row["max_density_deviation"] = js.get("max_density_deviation", math.nan)
+        if js.get("status") != "ok" and "message" in js:
+            row["message"] = js["message"]
+    if not os.path.exists(h5):
+        return row
+    m = subprocess.run([sys.executable, os.path.join(HERE, "die_swell_measure.py"), h5,
+                        "--out-dir", d, "--prefix", run.label] + (["--no-png"] if NO_PNG else []),
+                       capture_output=True, text=True)
+    sj = os.path.join(d, run.label + "_summary.json")
+    if m.returncode == 0 and os.path.exists(sj):
+        with open(sj) as fh:
+            ms = json.load(fh)
+        avg = ms["average"]
+        row["swell_mean"] = avg["mean"]
+        row["swell_std"] = avg["std"]
+        for s in ms["stations"]:
+            row[f"swell_x{s['x_m']:g}"] = s["mean"]
+        if ms.get("filled"):
+            row["filled_mean"] = ms["filled"]["mean"]
+            row["filled_std"] = ms["filled"]["std"]
+        row["frames_used"] = ms["frames_used"]
+    else:
+        row["measure_error"] = (m.stderr or m.stdout).strip().splitlines()[-1:]
+    try:
+        row["clusters"], row["detached"] = extrudate_clusters(h5)
+    except Exception as ex:  # an unreadable output is reported, not fatal for the study
+        row["clusters"], row["detached"] = math.nan, math.nan
+        row["measure_error"] = str(ex)
+    mean = row.get("swell_mean")
+    row["stable"] = bool(rc == 0 and row["clusters"] == 1 and row["detached"] <= 5
+                         and mean is not None and math.isfinite(mean))
+    return row
+
+
+COLUMNS = ["label", "v_m_s", "Re", "De", "alpha1_Pa_s2", "alpha2_Pa_s2", "form", "derivative",
+           "procedure", "scheme", "integrator", "thesis_force_N_kg", "thesis_swell",
+           "exit_status", "status", "end_time_s", "steps", "wall_s", "max_density_deviation", "swell_mean", "swell_std",
+           "swell_x0.21", "swell_x0.23", "swell_x0.25", "filled_mean", "filled_std", "frames_used", "clusters", "detached",
+           "stable", "message", "measure_error"]
+
+
+def fmt(v):
+    if v is None:
+        return ""
+    if isinstance(v, float):
+        return "nan" if not math.isfinite(v) else f"{v:.6g}"
+    return str(v)
+
+
+def short(v):
+    return f"{v:.4g}" if isinstance(v, float) else fmt(v)
+
+
+def plot(study, rows, png):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    if study in ("deborah", "frontier"):
+        for key, mk in (((5.0, "leapfrog"), "o-"), ((10.0, "leapfrog"), "s-"),
+                        ((5.0, "arkode"), "o--"), ((10.0, "arkode"), "s--")):
+            pts = sorted((r["De"], r.get("swell_mean", math.nan), r["stable"]) for r in rows
+                         if r["v_m_s"] == key[0] and r["integrator"] == key[1])
+            if not pts:
+                continue
+            line, = ax.plot([p[0] for p in pts], [p[1] for p in pts], mk,
+                            label=f"Re = {key[0]:g}, {key[1]}: envelope")
+            filled = sorted((r["De"], r.get("filled_mean", math.nan)) for r in rows
+                            if r["v_m_s"] == key[0] and r["integrator"] == key[1])
+            ax.plot([p[0] for p in filled], [p[1] for p in filled], mk[0] + ":",
+                    color=line.get_color(), mfc="none", label=f"Re = {key[0]:g}, {key[1]}: filled")
+            bad = [p for p in pts if not p[2]]
+            if bad:
+                ax.plot([p[0] for p in bad], [p[1] if math.isfinite(p[1]) else 1.0 for p in bad],
+                        "rx", ms=10)
+        ax.set_xlabel("De = |alpha1| v / (mu W)")
+        ax.set_ylabel("steady swell ratio (mean of x = 0.21, 0.23, 0.25 m)")
+        ax.legend(title="red x: not stable")
+    else:
+        labels = [r["label"] for r in rows]
+        vals = [r.get("swell_mean", math.nan) for r in rows]
+        errs = [r.get("swell_std", 0.0) or 0.0 for r in rows]
+        colors = ["tab:blue" if r["stable"] else "tab:red" for r in rows]
+        ax.bar(range(len(rows)), [v if math.isfinite(v) else 0.0 for v in vals],
+               yerr=[e if math.isfinite(e) else 0.0 for e in errs], color=colors)
+        ax.axhline(1.0, color="k", lw=0.8)
+        ax.set_xticks(range(len(rows)))
+        ax.set_xticklabels(labels, rotation=30, ha="right")
+        ax.set_ylabel("steady swell ratio (red: not stable)")
+    ax.set_title(f"die swell study: {study}")
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(png, dpi=120)
+    plt.close(fig)
+
+
+NO_PNG = False
+
+
+def main(argv=None):
+    global NO_PNG
+    ap = argparse.ArgumentParser(prog="die_swell_study.py", description=__doc__.split("\n")[0])
+    ap.add_argument("studies", nargs="+", choices=STUDIES, metavar="STUDY",
+                    help="one or more of " + ", ".join(STUDIES))
+    ap.add_argument("--across", type=int, default=10, metavar="N",
+                    help="particles across the die (default 10; thesis 25)")
+    ap.add_argument("--jobs", type=int, default=max(1, os.cpu_count() or 1), metavar="J",
+                    help="runs at once (each uses one core: set OMP_NUM_THREADS)")
+    ap.add_argument("--out", default="out/die_swell_study", metavar="DIR")
+    ap.add_argument("--vesph", default=os.path.join(ROOT, "build", "vesph"), metavar="PATH")
+    ap.add_argument("--only", nargs="+", metavar="LABEL")
+    ap.add_argument("--dry-run", action="store_true")
+    ap.add_argument("--measure-only", action="store_true")
+    ap.add_argument("--no-png", action="store_true")
+    a = ap.parse_args(argv)
+    NO_PNG = a.no_png
+    if a.across < 5:
+        ap.error("--across must be >= 5 (particles across the die)")
+    if not (a.dry_run or a.measure_only) and not shutil.which(a.vesph) and not os.path.exists(a.vesph):
+        ap.error(f"--vesph {a.vesph}: no such executable (build first: see README)")
+    status = 0
+    for study in a.studies:
+        runs = study_runs(study)
+        if a.only:
+            unknown = set(a.only) - {r.label for r in runs}
+            runs = [r for r in runs if r.label in a.only]
+            if not runs:
+                ap.error(f"--only: no run of study {study} is named {sorted(unknown)}; "
+                         f"its runs: {[r.label for r in study_runs(study)]}")
+        sd = os.path.join(a.out, study)
+        todo = []
+        for r in runs:
+            d = os.path.join(sd, r.label)
+            os.makedirs(d, exist_ok=True)
+            if not a.measure_only:
+                with open(os.path.join(d, r.label + ".toml"), "w") as fh:
+                    fh.write(f"# die_swell_study.py {study}: {r.label} (De = {r.De:.4g}, "
+                             f"Re = {r.Re:.4g}, {a.across} across)\n")
+                    fh.write(toml_dumps(scene_for(r, a.across)) + "\n")
+            todo.append((r, d))
+        if a.dry_run:
+            for r, d in todo:
+                print(f"{a.vesph} run {os.path.join(d, r.label + '.toml')} -o {d} --quiet")
+            continue
+        results = {}
+        if not a.measure_only:
+            env_note = os.environ.get("OMP_NUM_THREADS")
+            print(f"== {study}: {len(todo)} runs, {a.jobs} at once, {a.across} across"
+                  + (f", OMP_NUM_THREADS={env_note}" if env_note else ""), flush=True)
+            with concurrent.futures.ThreadPoolExecutor(a.jobs) as pool:
+                futs = {pool.submit(run_one, r, d, a.vesph): (r, d) for r, d in todo}
+                for f in concurrent.futures.as_completed(futs):
+                    r, d = futs[f]
+                    results[r.label] = f.result()
+                    print(f"   {r.label}: exit {results[r.label][0]}, "
+                          f"{results[r.label][1]:.0f} s", flush=True)
+        rows = []
+        for r, d in todo:
+            rc, wall = results.get(r.label, (None, math.nan))
+            if rc is None:       # --measure-only: the exit status from the summary
+                sj = os.path.join(d, "summary.json")
+                if os.path.exists(sj):
+                    with open(sj) as fh:
+                        js = json.load(fh)
+                    rc = {"ok": 0, "diverged": 3, "interrupted": 130}.get(js.get("status"), 1)
+                    wall = js.get("wall_seconds", math.nan)
+                else:
+                    rc = None
+            if rc is None:
+                print(f"   {r.label}: no output in {d}")
+                status = 1
+                continue
+            rows.append(measure(r, d, rc, wall if wall is not None else math.nan))
+        csv_path = os.path.join(sd, study + ".csv")
+        with open(csv_path, "w", newline="") as fh:
+            w = csv.writer(fh)
+            w.writerow(COLUMNS)
+            for row in rows:
+                w.writerow([fmt(row.get(c)) for c in COLUMNS])
+        print(f"== {study} ({a.across} across)")
+        print(f"   {'label':<28}{'De':>7}{'Re':>6}{'exit':>6}{'swell':>9}{'std':>8}"
+              f"{'filled':>9}{'clust':>6}{'det':>5}  stable")
+        for row in rows:
+            print(f"   {row['label']:<28}{row['De']:7.3g}{row['Re']:6.3g}{row['exit_status']:6d}"
+                  f"{short(row.get('swell_mean')):>9}{short(row.get('swell_std')):>8}"
+                  f"{short(row.get('filled_mean')):>9}"
+                  f"{fmt(row.get('clusters')):>6}{fmt(row.get('detached')):>5}  "
+                  f"{'yes' if row['stable'] else 'NO'}"
+                  + (f"   ({row['message']})" if row.get("message") else ""))
+        print(f"wrote {csv_path}")
+        if rows and not a.no_png:
+            png = os.path.join(sd, study + ".png")
+            plot(study, rows, png)
+            print(f"wrote {png}")
+    return status
+
+
+if __name__ == "__main__":
+    sys.exit(main())
