@@ -157,3 +157,42 @@ TEST_CASE("second-order fluid: the product-rule derivative of the elastic stress
       CHECK((fd - exact).norm() < 1e-9 * exact.norm());
     }
 }
+
+TEST_CASE("second-order fluid: the quasi-steady law loses its dissipation at |c1| gamma / mu = 1") {
+  // docs/theory.md §5.7: linearise T(kappa) (DA/Dt = 0) about the shear kappa = g e_x e_y and take
+  // a divergence-free wave v^ perp k^; the viscosity it feels is Q(theta) = v^.T'(v^ k^T).k^ with
+  // T' the derivative of T along v^ k^T (T is quadratic in kappa: the central difference is
+  // exact). Claimed: min over theta of Q = mu (1 - |c1| g / mu) for the contravariant,
+  // covariant and Jaumann derivatives, and Q >= mu (well posed) for the mixed one, either sign of
+  // alpha1. Wi = |c1| g / mu is varied through g.
+  for (SecondOrderForm f : {SecondOrderForm::rivlin_ericksen, SecondOrderForm::cef})
+    for (int k = 0; k < 4; ++k)
+      for (double sign : {-1.0, 1.0})
+        for (double wi : {0.5, 1.0, 2.0, 3.0}) {
+          SecondOrderFluidLaw l = law(f, kDerivatives[k]);
+          l.alpha1 = sign * 2e-3;
+          l.alpha2 = -0.1 * l.alpha1;
+          const double g = wi * l.mu / std::abs(l.c1());
+          Mat<2> K = Mat<2>::Zero();
+          K(0, 1) = g;
+          double qmin = 1e300;
+          for (int n = 0; n < 720; ++n) {
+            const double th = M_PI * n / 720.0;
+            Vec<2> kh, vh;
+            kh << std::cos(th), std::sin(th);
+            vh << -std::sin(th), std::cos(th);
+            const Mat<2> P = vh * kh.transpose();
+            const double e = 1e-3 * g;
+            const Mat<2> dT = (l.extra<2>(K + e * P, Mat<2>::Zero()) - l.extra<2>(K - e * P, Mat<2>::Zero())) / (2 * e);
+            qmin = std::min(qmin, vh.dot(dT * kh));
+          }
+          CAPTURE(static_cast<int>(f));
+          CAPTURE(k);
+          CAPTURE(sign);
+          CAPTURE(wi);
+          if (kDerivatives[k] == ConvectedDerivative::mixed)
+            CHECK(qmin >= l.mu * (1 - 1e-9));
+          else
+            CHECK(qmin == doctest::Approx(l.mu * (1.0 - wi)).epsilon(1e-6).scale(l.mu));
+        }
+}

@@ -89,12 +89,17 @@ class Run:
 
     def __init__(self, label, v, alpha1, form="rivlin_ericksen", derivative="contravariant",
                  procedure=3, scheme="wcsph", integrator="leapfrog", thesis_force=None,
-                 thesis_swell=None, duration=1.0):
+                 thesis_swell=None, duration=1.0, model="second_order_fluid"):
         self.label, self.v, self.alpha1 = label, v, alpha1
         self.form, self.derivative, self.procedure = form, derivative, procedure
         self.scheme, self.integrator = scheme, integrator
         self.thesis_force, self.thesis_swell = thesis_force, thesis_swell
         self.duration = duration      # the run lasts duration * 0.045 s * 6.8 / v
+        # "second_order_fluid", or "oldroyd_b": the Oldroyd-B fluid with the same viscometric
+        # functions in steady shear as the case's form (viscosity mu; first normal-stress
+        # coefficient Psi1 = 2 eta_p lambda = -2 alpha1, theory.md §5.7 table, Rivlin-Ericksen
+        # contravariant; N2 = 0 instead of alpha2-ish), solvent ratio eta_s/mu = 1/9.
+        self.model = model
 
     @property
     def De(self):
@@ -142,6 +147,13 @@ def study_runs(study):
                               (5.0, "leapfrog", (0.4, 1.0)), (5.0, "arkode", (1.0,))):
             for de in des:
                 runs.append(Run(f"re{v:g}_de{de:g}_{integ}", v, -de * MU * W / v, integrator=integ))
+        # The second-order fluid loses its dissipation where the local Weissenberg number
+        # |alpha1| gamma_dot / mu exceeds 1 (docs/theory.md): beyond, the Oldroyd-B fluid of the
+        # same mu and Psi1 (well posed at every Weissenberg number).
+        for integ, des in (("leapfrog", (0.5, 1.0, 2.0)), ("arkode", (1.0,))):
+            for de in des:
+                runs.append(Run(f"re10_de{de:g}_oldroyd_b_{integ}", 10.0, -de * MU * W / 10.0,
+                                integrator=integ, model="oldroyd_b"))
         return runs
     raise ValueError(study)
 
@@ -184,6 +196,13 @@ def scene_for(run, across):
     if run.procedure == 4:
         del e["stress_divergence"]       # Case 4 computes div T from the velocity derivatives
     e["equation_of_state"]["sound_speed"] = g6(120.0 * max(1.0, run.v / 6.8))
+    if run.model == "oldroyd_b":
+        # Same mu = eta_s + eta_p and Psi1 = 2 eta_p lambda = -2 alpha1 (alpha1 < 0).
+        eta_p = MU * 8.0 / 9.0
+        del e["second_order_fluid"]
+        s["fluid"]["viscosity"] = g6(MU - eta_p)
+        e["oldroyd_b"] = {"relaxation_time": g6(-run.alpha1 / eta_p),
+                          "polymer_viscosity": g6(eta_p)}
     if run.scheme == "isph":
         # Projection instead of the equation of state: no density evolution, no sound speed;
         # p = 0 on the free surface needs its detection (docs/user-guide.md, [solver]).
@@ -267,7 +286,8 @@ def measure(run, d, rc, wall):
     row = {"label": run.label, "v_m_s": run.v, "Re": run.Re, "De": round(run.De, 6),
            "alpha1_Pa_s2": run.alpha1, "alpha2_Pa_s2": -0.1 * run.alpha1, "form": run.form,
            "derivative": run.derivative, "procedure": run.procedure, "scheme": run.scheme,
-           "integrator": run.integrator, "thesis_force_N_kg": run.thesis_force,
+           "integrator": run.integrator, "model": run.model,
+           "thesis_force_N_kg": run.thesis_force,
            "thesis_swell": run.thesis_swell, "exit_status": rc, "status": "",
            "end_time_s": math.nan, "steps": math.nan, "wall_s": round(wall, 1),
            "stable": False}
@@ -290,14 +310,15 @@ def measure(run, d, rc, wall):
     if m.returncode == 0 and os.path.exists(sj):
         with open(sj) as fh:
             ms = json.load(fh)
+        num = lambda v: math.nan if v is None else float(v)  # noqa: E731 (JSON null: NaN)
         avg = ms["average"]
-        row["swell_mean"] = avg["mean"]
-        row["swell_std"] = avg["std"]
+        row["swell_mean"] = num(avg["mean"])
+        row["swell_std"] = num(avg["std"])
         for s in ms["stations"]:
-            row[f"swell_x{s['x_m']:g}"] = s["mean"]
+            row[f"swell_x{s['x_m']:g}"] = num(s["mean"])
         if ms.get("filled"):
-            row["filled_mean"] = ms["filled"]["mean"]
-            row["filled_std"] = ms["filled"]["std"]
+            row["filled_mean"] = num(ms["filled"]["mean"])
+            row["filled_std"] = num(ms["filled"]["std"])
         row["frames_used"] = ms["frames_used"]
     else:
         row["measure_error"] = (m.stderr or m.stdout).strip().splitlines()[-1:]
@@ -312,7 +333,7 @@ def measure(run, d, rc, wall):
     return row
 
 
-COLUMNS = ["label", "v_m_s", "Re", "De", "alpha1_Pa_s2", "alpha2_Pa_s2", "form", "derivative",
+COLUMNS = ["label", "model", "v_m_s", "Re", "De", "alpha1_Pa_s2", "alpha2_Pa_s2", "form", "derivative",
            "procedure", "scheme", "integrator", "thesis_force_N_kg", "thesis_swell",
            "exit_status", "status", "end_time_s", "steps", "wall_s", "max_density_deviation", "swell_mean", "swell_std",
            "swell_x0.21", "swell_x0.23", "swell_x0.25", "filled_mean", "filled_std", "frames_used", "clusters", "detached",
@@ -338,29 +359,35 @@ def plot(study, rows, png):
 
     fig, ax = plt.subplots(figsize=(7, 4.5))
     if study in ("deborah", "frontier"):
-        for key, mk in (((5.0, "leapfrog"), "o-"), ((10.0, "leapfrog"), "s-"),
-                        ((5.0, "arkode"), "o--"), ((10.0, "arkode"), "s--")):
-            pts = sorted((r["De"], r.get("swell_mean", math.nan), r["stable"]) for r in rows
-                         if r["v_m_s"] == key[0] and r["integrator"] == key[1])
-            if not pts:
+        nan = math.nan
+        val = lambda r, k: r.get(k) if isinstance(r.get(k), float) else nan  # noqa: E731
+        for v, integ, model, mk in ((5.0, "leapfrog", "second_order_fluid", "o-"),
+                                    (10.0, "leapfrog", "second_order_fluid", "s-"),
+                                    (5.0, "arkode", "second_order_fluid", "o--"),
+                                    (10.0, "arkode", "second_order_fluid", "s--"),
+                                    (10.0, "leapfrog", "oldroyd_b", "^-"),
+                                    (10.0, "arkode", "oldroyd_b", "^--")):
+            sel = sorted((r for r in rows if r["v_m_s"] == v and r["integrator"] == integ
+                          and r["model"] == model), key=lambda r: r["De"])
+            if not sel:
                 continue
-            line, = ax.plot([p[0] for p in pts], [p[1] for p in pts], mk,
-                            label=f"Re = {key[0]:g}, {key[1]}: envelope")
-            filled = sorted((r["De"], r.get("filled_mean", math.nan)) for r in rows
-                            if r["v_m_s"] == key[0] and r["integrator"] == key[1])
-            ax.plot([p[0] for p in filled], [p[1] for p in filled], mk[0] + ":",
-                    color=line.get_color(), mfc="none", label=f"Re = {key[0]:g}, {key[1]}: filled")
-            bad = [p for p in pts if not p[2]]
-            if bad:
-                ax.plot([p[0] for p in bad], [p[1] if math.isfinite(p[1]) else 1.0 for p in bad],
+            name = f"Re = {v:g}, {integ}" + (", Oldroyd-B" if model == "oldroyd_b" else "")
+            de = [r["De"] for r in sel]
+            line, = ax.plot(de, [val(r, "swell_mean") for r in sel], mk, label=name + ": envelope")
+            ax.plot(de, [val(r, "filled_mean") for r in sel], mk[0] + ":", color=line.get_color(),
+                    mfc="none", label=name + ": filled")
+            bad = [r for r in sel if not r["stable"]]
+            if bad:   # unstable runs at ratio 1 when they have no steady value
+                y = [val(r, "swell_mean") for r in bad]
+                ax.plot([r["De"] for r in bad], [q if math.isfinite(q) else 1.0 for q in y],
                         "rx", ms=10)
         ax.set_xlabel("De = |alpha1| v / (mu W)")
         ax.set_ylabel("steady swell ratio (mean of x = 0.21, 0.23, 0.25 m)")
         ax.legend(title="red x: not stable")
     else:
         labels = [r["label"] for r in rows]
-        vals = [r.get("swell_mean", math.nan) for r in rows]
-        errs = [r.get("swell_std", 0.0) or 0.0 for r in rows]
+        vals = [r["swell_mean"] if isinstance(r.get("swell_mean"), float) else math.nan for r in rows]
+        errs = [r["swell_std"] if isinstance(r.get("swell_std"), float) else 0.0 for r in rows]
         colors = ["tab:blue" if r["stable"] else "tab:red" for r in rows]
         ax.bar(range(len(rows)), [v if math.isfinite(v) else 0.0 for v in vals],
                yerr=[e if math.isfinite(e) else 0.0 for e in errs], color=colors)
