@@ -18,10 +18,13 @@ Re = rho W v / mu with rho = 1000 kg/m^3, mu = 10 Pa s, W = 0.01 m; alpha2 = -0.
   forms        Fig. 4-6: Rivlin-Ericksen and CEF x the four convected derivatives at
                v = 6.8 m/s, alpha1 = -4e-3 (De = 0.272)
   procedures   §4.4.2: Case 1-4 at v = 3.4 m/s, alpha1 = -2.8e-3 (De = 0.0952)
-  wsph_isph    §4.4.6: WCSPH and ISPH at v = 6.8 m/s, alpha1 = -4e-3 (thesis 1.362, 1.355)
+  wsph_isph    §4.4.6: WCSPH and ISPH at v = 6.8 m/s, alpha1 = -4e-3 (thesis 1.362, 1.355);
+               the ISPH scene takes grad p by eq. 3.16 and p = 0 on detected free surface
   frontier     beyond §4.4.5's limits (De 0.3 at Re 5, 0.5 at Re 10): Re = 10 with
                De = 0.75, 1.0, 1.5, 2.0 (leapfrog) and 1.0, 1.5 (adaptive ARKODE), Re = 5
-               with De = 0.4, 1.0 (leapfrog) and 1.0 (ARKODE)
+               with De = 0.4, 1.0 (leapfrog) and 1.0 (ARKODE); and the Oldroyd-B fluid of
+               the same viscosity and first normal-stress coefficient at Re = 10, De = 0.5,
+               1, 2 (leapfrog) and 1 (ARKODE)
 
 The feed is the prescribed fully developed profile (mean velocity v/1.5): the thesis tuned a
 body force F per run to reach v (its F values are listed in the table for reference); the
