@@ -101,7 +101,8 @@ class Run:
         # "second_order_fluid", or "oldroyd_b": the Oldroyd-B fluid with the same viscometric
         # functions in steady shear as the case's form (viscosity mu; first normal-stress
         # coefficient Psi1 = 2 eta_p lambda = -2 alpha1, theory.md §5.7 table, Rivlin-Ericksen
-        # contravariant; N2 = 0 instead of alpha2-ish), solvent ratio eta_s/mu = 1/9.
+        # contravariant; but N2 = 0, where the second-order fluid has alpha2), solvent ratio
+        # eta_s/mu = 1/9.
         self.model = model
 
     @property
@@ -127,14 +128,12 @@ def study_runs(study):
         return [Run("swell_a1_-4e-3", 9.5, -4e-3, thesis_force=18800),
                 Run("contract_a1_+4e-3", 9.5, 4e-3, thesis_force=200000)]
     if study == "forms":
-        names = {("rivlin_ericksen", "contravariant"): "Ab", ("rivlin_ericksen", "covariant"): "Aa",
-                 ("rivlin_ericksen", "mixed"): "Am", ("rivlin_ericksen", "jaumann"): "Aj",
-                 ("cef", "contravariant"): "Cb", ("cef", "covariant"): "Ca",
-                 ("cef", "mixed"): "Cm", ("cef", "jaumann"): "Cj"}
         # Shorter runs (0.6: to 0.027 s, the front past x = 0.25 m from about 0.014 s): the
         # question is which forms swell, not the last digit of the swell.
         return [Run(f"{form}_{d}", 6.8, -4e-3, form=form, derivative=d, thesis_force=18800,
-                    duration=0.6) for (form, d) in names]
+                    duration=0.6)
+                for form in ("rivlin_ericksen", "cef")
+                for d in ("contravariant", "covariant", "mixed", "jaumann")]
     if study == "procedures":
         return [Run(f"case{k}", 3.4, -2.8e-3, procedure=k, duration=0.6) for k in (1, 2, 3, 4)]
     if study == "wsph_isph":
