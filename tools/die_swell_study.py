@@ -283,8 +283,24 @@ def extrudate_clusters(h5):
         r.close()
 
 
-def measure(run, d, rc, wall):
+EXIT_OF_STATUS = {"ok": 0, "diverged": 3, "interrupted": 130}
+
+
+def measure(run, d, rc, wall, png):
+    """The study's row for one run. rc None (--measure-only): the exit status and wall time
+    from the run's summary.json; then None when the run left no summary."""
     h5 = os.path.join(d, run.label + ".h5")
+    summ = os.path.join(d, "summary.json")
+    js = None
+    if os.path.exists(summ):
+        with open(summ) as fh:
+            js = json.load(fh)
+    if rc is None:
+        if js is None:
+            return None
+        rc = EXIT_OF_STATUS.get(js.get("status"), 1)
+        wall = js.get("wall_seconds")
+        wall = math.nan if wall is None else wall
     row = {"label": run.label, "v_m_s": run.v, "Re": run.Re, "De": round(run.De, 6),
            "alpha1_Pa_s2": run.alpha1, "alpha2_Pa_s2": -0.1 * run.alpha1, "form": run.form,
            "derivative": run.derivative, "procedure": run.procedure, "scheme": run.scheme,
@@ -293,10 +309,7 @@ def measure(run, d, rc, wall):
            "thesis_swell": run.thesis_swell, "exit_status": rc, "status": "",
            "end_time_s": math.nan, "steps": math.nan, "wall_s": round(wall, 1),
            "stable": False}
-    summ = os.path.join(d, "summary.json")
-    if os.path.exists(summ):
-        with open(summ) as fh:
-            js = json.load(fh)
+    if js is not None:
         row["status"] = js.get("status", "")
         row["end_time_s"] = js.get("final_time", math.nan)
         row["steps"] = js.get("steps", math.nan)
@@ -306,7 +319,7 @@ def measure(run, d, rc, wall):
     if not os.path.exists(h5):
         return row
     m = subprocess.run([sys.executable, os.path.join(HERE, "die_swell_measure.py"), h5,
-                        "--out-dir", d, "--prefix", run.label] + (["--no-png"] if NO_PNG else []),
+                        "--out-dir", d, "--prefix", run.label] + ([] if png else ["--no-png"]),
                        capture_output=True, text=True)
     sj = os.path.join(d, run.label + "_summary.json")
     if m.returncode == 0 and os.path.exists(sj):
@@ -404,11 +417,7 @@ def plot(study, rows, png):
     plt.close(fig)
 
 
-NO_PNG = False
-
-
 def main(argv=None):
-    global NO_PNG
     ap = argparse.ArgumentParser(prog="die_swell_study.py", description=__doc__.split("\n")[0])
     ap.add_argument("studies", nargs="+", choices=STUDIES, metavar="STUDY",
                     help="one or more of " + ", ".join(STUDIES))
@@ -423,7 +432,6 @@ def main(argv=None):
     ap.add_argument("--measure-only", action="store_true")
     ap.add_argument("--no-png", action="store_true")
     a = ap.parse_args(argv)
-    NO_PNG = a.no_png
     if a.across < 5:
         ap.error("--across must be >= 5 (particles across the die)")
     if not (a.dry_run or a.measure_only) and not shutil.which(a.vesph) and not os.path.exists(a.vesph):
@@ -466,21 +474,13 @@ def main(argv=None):
                           f"{results[r.label][1]:.0f} s", flush=True)
         rows = []
         for r, d in todo:
-            rc, wall = results.get(r.label, (None, math.nan))
-            if rc is None:       # --measure-only: the exit status from the summary
-                sj = os.path.join(d, "summary.json")
-                if os.path.exists(sj):
-                    with open(sj) as fh:
-                        js = json.load(fh)
-                    rc = {"ok": 0, "diverged": 3, "interrupted": 130}.get(js.get("status"), 1)
-                    wall = js.get("wall_seconds", math.nan)
-                else:
-                    rc = None
-            if rc is None:
+            rc, wall = results.get(r.label, (None, math.nan))   # None: --measure-only
+            row = measure(r, d, rc, wall, png=not a.no_png)
+            if row is None:
                 print(f"   {r.label}: no output in {d}")
                 status = 1
                 continue
-            rows.append(measure(r, d, rc, wall if wall is not None else math.nan))
+            rows.append(row)
         csv_path = os.path.join(sd, study + ".csv")
         with open(csv_path, "w", newline="") as fh:
             w = csv.writer(fh)
