@@ -1,5 +1,5 @@
 // The `vesph` command (DESIGN.md "Command line"):
-//   vesph run SCENE.toml [-o DIR] [--set KEY=VALUE]... [--quiet]
+//   vesph run SCENE.toml [-o DIR] [--set KEY=VALUE]... [--quiet] [--resume]
 //   vesph check SCENE.toml [--set KEY=VALUE]...
 //   vesph list
 //   vesph bench SCENE.toml [--steps N] [--threads LIST] [--set KEY=VALUE]...
@@ -38,12 +38,12 @@ void resetPeakMemory() {
 }
 
 template <int D>
-int runScene(Config& cfg, const SceneHeader& h, const std::string& out_dir, bool quiet) {
+int runScene(Config& cfg, const SceneHeader& h, const std::string& out_dir, bool quiet, bool resume) {
   Simulation<D> sim(cfg, h);
   const std::string dir = out_dir.empty() ? "output/" + h.name : out_dir;
   if (!quiet) std::cerr << sim.describe();
   installInterruptHandlers();
-  const RunReport r = sim.run(RunOptions{dir, quiet, true, 0});
+  const RunReport r = sim.run(RunOptions{dir, quiet, true, 0, resume});
   std::cerr << "vesph: " << statusName(r.status) << ": " << r.message << "\n"
             << "vesph: output in " << dir << "/ (" << h.name << ".h5, " << h.name << ".xdmf, summary.json); "
             << r.summary["steps"] << " steps, " << r.summary["rhs_evals"] << " rhs evaluations, "
@@ -141,7 +141,7 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   std::string scene, out_dir;
   std::vector<std::string> sets;
-  bool quiet = false;
+  bool quiet = false, resume = false;
   std::uint64_t steps = 20;
   std::vector<int> threads;
   int repeat = 3;
@@ -151,6 +151,9 @@ int main(int argc, char** argv) {
   run->add_option("-o,--output", out_dir, "output directory (default output/<scene name>)");
   run->add_option("--set", sets, "override a scene key: --set fluid.viscosity=1e-3 (repeatable)");
   run->add_flag("--quiet", quiet, "plain periodic progress lines instead of a live display");
+  run->add_flag("--resume", resume,
+                "go on from the last frame of the run in DIR (its checkpoint), appending to its files; only [time], "
+                "[output], [checks] and [integrator] may differ from that run's scene");
 
   auto* check = app.add_subcommand("check", "validate a scene and print it with every default resolved");
   check->add_option("scene", scene, "scene file (TOML)")->required();
@@ -184,7 +187,7 @@ int main(int argc, char** argv) {
     }
     Config cfg = loadScene(scene, sets, h);
     if (app.got_subcommand("check")) return h.dimension == 2 ? checkScene<2>(cfg, h) : checkScene<3>(cfg, h);
-    return h.dimension == 2 ? runScene<2>(cfg, h, out_dir, quiet) : runScene<3>(cfg, h, out_dir, quiet);
+    return h.dimension == 2 ? runScene<2>(cfg, h, out_dir, quiet, resume) : runScene<3>(cfg, h, out_dir, quiet, resume);
   } catch (const InputError& e) {
     std::cerr << "vesph: invalid input: " << e.what() << "\n";
     return 2;

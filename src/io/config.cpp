@@ -352,4 +352,38 @@ std::vector<std::string> ConfigTable::keys() const {
   return out;
 }
 
+namespace {
+std::string firstDifference(const toml::table& a, const toml::table& b, const std::string& path,
+                            const std::set<std::string>& free) {
+  std::set<std::string> keys;
+  for (const auto& [k, v] : a) keys.insert(std::string(k.str()));
+  for (const auto& [k, v] : b) keys.insert(std::string(k.str()));
+  for (const std::string& k : keys) {
+    if (path.empty() && free.count(k)) continue;
+    const std::string here = path.empty() ? k : path + "." + k;
+    const toml::node* x = a.get(k);
+    const toml::node* y = b.get(k);
+    if (!x || !y) return here;
+    if (x->is_table() && y->is_table()) {
+      const std::string d = firstDifference(*x->as_table(), *y->as_table(), here, free);
+      if (!d.empty()) return d;
+    } else if (toml::node_view<const toml::node>{x} != toml::node_view<const toml::node>{y}) {
+      return here;
+    }
+  }
+  return {};
+}
+}  // namespace
+
+std::string firstSceneDifference(const std::string& a, const std::string& b, const std::set<std::string>& free) {
+  toml::table ta, tb;
+  try {
+    ta = toml::parse(a);
+    tb = toml::parse(b);
+  } catch (const toml::parse_error& e) {
+    return std::string("(unreadable scene: ") + std::string(e.description()) + ")";
+  }
+  return firstDifference(ta, tb, "", free);
+}
+
 }  // namespace vesph

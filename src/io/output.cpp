@@ -2,11 +2,15 @@
 
 #include <hdf5.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
+
+#include "vesph/core/types.hpp"
 
 namespace vesph {
 namespace {
@@ -65,7 +69,186 @@ void writeAtomically(const std::string& path, const std::string& text) {
   std::filesystem::rename(tmp, path);
 }
 
+// Attributes that are rewritten (the scene on resume, the checkpoint's counters): delete, then
+// create (an attribute's type and size are fixed once created).
+void replaceAttrString(hid_t loc, const char* name, const std::string& value) {
+  if (H5Aexists(loc, name) > 0) check(H5Adelete(loc, name), name);
+  attrString(loc, name, value);
+}
+template <class T>
+void replaceAttrScalar(hid_t loc, const char* name, hid_t type, T value) {
+  if (H5Aexists(loc, name) > 0) check(H5Adelete(loc, name), name);
+  attrScalar<T>(loc, name, type, value);
+}
+
+std::string readAttrString(hid_t loc, const char* name) {
+  if (H5Aexists(loc, name) <= 0) return {};
+  hid_t a = checkId(H5Aopen(loc, name, H5P_DEFAULT), name);
+  hid_t type = H5Aget_type(a);
+  std::string value;
+  if (H5Tget_class(type) == H5T_STRING) {
+    const std::size_t size = H5Tget_size(type);
+    std::vector<char> buf(size + 1, '\0');
+    hid_t mem = H5Tcopy(H5T_C_S1);
+    H5Tset_size(mem, size + 1);
+    if (H5Aread(a, mem, buf.data()) >= 0) value = buf.data();
+    H5Tclose(mem);
+  }
+  H5Tclose(type);
+  H5Aclose(a);
+  return value;
+}
+template <class T>
+T readAttrScalar(hid_t loc, const char* name, hid_t type) {
+  T value{};
+  hid_t a = checkId(H5Aopen(loc, name, H5P_DEFAULT), name);
+  check(H5Aread(a, type, &value), name);
+  H5Aclose(a);
+  return value;
+}
+
+std::size_t datasetRows(hid_t loc, const char* name) {
+  hid_t d = checkId(H5Dopen2(loc, name, H5P_DEFAULT), name);
+  hid_t space = H5Dget_space(d);
+  hsize_t dims[2] = {0, 0};
+  H5Sget_simple_extent_dims(space, dims, nullptr);
+  H5Sclose(space);
+  H5Dclose(d);
+  return dims[0];
+}
+
+template <class T>
+std::vector<T> readVector(hid_t loc, const char* name, hid_t mem_type) {
+  std::vector<T> v(datasetRows(loc, name));
+  hid_t d = checkId(H5Dopen2(loc, name, H5P_DEFAULT), name);
+  if (!v.empty()) check(H5Dread(d, mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data()), name);
+  H5Dclose(d);
+  return v;
+}
+
+// A 1-D dataset that can grow and shrink (chunked, unlimited), created on first use and then
+// overwritten in place: the checkpoint does not make the file grow with every frame.
+void writeResizable(hid_t group, const char* name, hid_t file_type, hid_t mem_type, const void* data, std::size_t n) {
+  hid_t d;
+  if (H5Lexists(group, name, H5P_DEFAULT) > 0) {
+    d = checkId(H5Dopen2(group, name, H5P_DEFAULT), name);
+  } else {
+    hsize_t dims[1] = {0}, maxdims[1] = {H5S_UNLIMITED}, chunk[1] = {1 << 16};
+    hid_t space = H5Screate_simple(1, dims, maxdims);
+    hid_t plist = H5Pcreate(H5P_DATASET_CREATE);
+    H5Pset_chunk(plist, 1, chunk);
+    d = checkId(H5Dcreate2(group, name, file_type, space, H5P_DEFAULT, plist, H5P_DEFAULT), name);
+    H5Pclose(plist);
+    H5Sclose(space);
+  }
+  hsize_t size[1] = {n};
+  check(H5Dset_extent(d, size), name);
+  if (n) check(H5Dwrite(d, mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data), name);
+  H5Dclose(d);
+}
+
 }  // namespace
+
+ResumeSource readResumeSource(const std::string& dir, const std::string& name) {
+  const std::string path = (std::filesystem::path(dir) / (name + ".h5")).string();
+  if (!std::filesystem::exists(path))
+    throw InputError("--resume: nothing to resume: " + path + " does not exist (run without --resume first)");
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  hid_t file = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  if (file < 0) throw InputError("--resume: " + path + " is not a readable HDF5 file");
+  ResumeSource r;
+  try {
+    if (readAttrString(file, "format") != "vesph-1") throw InputError("--resume: " + path + " is not a vesph-1 output file");
+    r.scene_toml = readAttrString(file, "scene");
+    if (H5Lexists(file, "checkpoint", H5P_DEFAULT) <= 0)
+      throw InputError("--resume: " + path + " holds no checkpoint (written by a vesph without --resume support)");
+    hid_t g = checkId(H5Gopen2(file, "checkpoint", H5P_DEFAULT), "checkpoint");
+    Checkpoint& c = r.checkpoint;
+    c.time = readAttrScalar<double>(g, "time", H5T_NATIVE_DOUBLE);
+    c.step = readAttrScalar<std::int64_t>(g, "step", H5T_NATIVE_INT64);
+    c.rhs_evals = readAttrScalar<std::uint64_t>(g, "rhs_evals", H5T_NATIVE_UINT64);
+    c.rejected_steps = readAttrScalar<std::uint64_t>(g, "rejected_steps", H5T_NATIVE_UINT64);
+    c.neighbour_builds = readAttrScalar<std::uint64_t>(g, "neighbour_builds", H5T_NATIVE_UINT64);
+    c.wall_seconds = readAttrScalar<double>(g, "wall_seconds", H5T_NATIVE_DOUBLE);
+    c.max_density_deviation = readAttrScalar<double>(g, "max_density_deviation", H5T_NATIVE_DOUBLE);
+    c.resumes = readAttrScalar<std::uint64_t>(g, "resumes", H5T_NATIVE_UINT64);
+    c.state = readVector<double>(g, "state", H5T_NATIVE_DOUBLE);
+    c.id = readVector<std::uint64_t>(g, "id", H5T_NATIVE_UINT64);
+    H5Gclose(g);
+  } catch (...) {
+    H5Fclose(file);
+    throw;
+  }
+  H5Fclose(file);
+  return r;
+}
+
+template <int D>
+OutputWriter<D>::OutputWriter(const std::string& dir, const std::string& name, const FileAttributes& attrs,
+                              double resume_time)
+    : dir_(dir), name_(name), extra_columns_(attrs.extra_columns) {
+  h5_path_ = (std::filesystem::path(dir) / (name + ".h5")).string();
+  xdmf_path_ = (std::filesystem::path(dir) / (name + ".xdmf")).string();
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  file_ = H5Fopen(h5_path_.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+  if (file_ < 0) throw std::runtime_error("cannot open " + h5_path_ + " for writing");
+  replaceAttrString(file_, "scene", attrs.scene_toml);
+  // Frames up to the checkpoint stay; later ones (none when the checkpoint is the last frame,
+  // as vesph writes it) are removed. A frame's time may differ from resume_time by rounding.
+  const double tol = 1e-12 * std::max(1.0, std::abs(resume_time));
+  hid_t frames = checkId(H5Gopen2(file_, "frames", H5P_DEFAULT), "frames");
+  for (std::size_t k = 0;; ++k) {
+    char gname[32];
+    std::snprintf(gname, sizeof gname, "%06zu", k);
+    if (H5Lexists(frames, gname, H5P_DEFAULT) <= 0) break;
+    hid_t g = checkId(H5Gopen2(frames, gname, H5P_DEFAULT), gname);
+    const double t = readAttrScalar<double>(g, "time", H5T_NATIVE_DOUBLE);
+    FrameInfo info{gname, t, datasetRows(g, "id"), H5Lexists(g, "extra_stress", H5P_DEFAULT) > 0,
+                   H5Lexists(g, "free_surface", H5P_DEFAULT) > 0, H5Lexists(g, "pressure", H5P_DEFAULT) > 0,
+                   H5Lexists(g, "extra_stress_zz", H5P_DEFAULT) > 0};
+    H5Gclose(g);
+    if (t > resume_time + tol) check(H5Ldelete(frames, gname, H5P_DEFAULT), "remove a frame after the checkpoint");
+    else frames_.push_back(info);
+  }
+  H5Gclose(frames);
+  // Diagnostics rows after the checkpoint's time are dropped from every column.
+  hid_t diag = checkId(H5Gopen2(file_, "diagnostics", H5P_DEFAULT), "diagnostics");
+  const std::vector<double> times = readVector<double>(diag, "time", H5T_NATIVE_DOUBLE);
+  diag_rows_ = 0;
+  while (diag_rows_ < times.size() && times[diag_rows_] <= resume_time + tol) ++diag_rows_;
+  std::vector<std::string> columns(std::begin(kDiagColumns), std::end(kDiagColumns));
+  for (const std::string& c : extra_columns_) columns.push_back(c);
+  for (const std::string& col : columns) {
+    if (H5Lexists(diag, col.c_str(), H5P_DEFAULT) <= 0)
+      throw std::runtime_error(h5_path_ + ": /diagnostics has no column '" + col + "' to append to");
+    hid_t d = checkId(H5Dopen2(diag, col.c_str(), H5P_DEFAULT), col.c_str());
+    hsize_t size[1] = {diag_rows_};
+    check(H5Dset_extent(d, size), "truncate diagnostics");
+    H5Dclose(d);
+  }
+  H5Gclose(diag);
+  check(H5Fflush(file_, H5F_SCOPE_GLOBAL), "flush");
+  writeXdmf();
+}
+
+template <int D>
+void OutputWriter<D>::writeCheckpoint(const Checkpoint& c) {
+  hid_t g = H5Lexists(file_, "checkpoint", H5P_DEFAULT) > 0
+                ? checkId(H5Gopen2(file_, "checkpoint", H5P_DEFAULT), "checkpoint")
+                : checkId(H5Gcreate2(file_, "checkpoint", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), "checkpoint");
+  writeResizable(g, "state", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, c.state.data(), c.state.size());
+  writeResizable(g, "id", H5T_STD_U64LE, H5T_NATIVE_UINT64, c.id.data(), c.id.size());
+  replaceAttrScalar<std::int64_t>(g, "step", H5T_NATIVE_INT64, c.step);
+  replaceAttrScalar<std::uint64_t>(g, "rhs_evals", H5T_NATIVE_UINT64, c.rhs_evals);
+  replaceAttrScalar<std::uint64_t>(g, "rejected_steps", H5T_NATIVE_UINT64, c.rejected_steps);
+  replaceAttrScalar<std::uint64_t>(g, "neighbour_builds", H5T_NATIVE_UINT64, c.neighbour_builds);
+  replaceAttrScalar<double>(g, "wall_seconds", H5T_NATIVE_DOUBLE, c.wall_seconds);
+  replaceAttrScalar<double>(g, "max_density_deviation", H5T_NATIVE_DOUBLE, c.max_density_deviation);
+  replaceAttrScalar<std::uint64_t>(g, "resumes", H5T_NATIVE_UINT64, c.resumes);
+  replaceAttrScalar<double>(g, "time", H5T_NATIVE_DOUBLE, c.time);
+  H5Gclose(g);
+  check(H5Fflush(file_, H5F_SCOPE_GLOBAL), "flush");
+}
 
 template <int D>
 OutputWriter<D>::OutputWriter(const std::string& dir, const std::string& name, const FileAttributes& attrs)

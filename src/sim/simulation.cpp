@@ -487,17 +487,62 @@ RunReport Simulation<D>::run(const RunOptions& opt) {
   using Clock = std::chrono::steady_clock;
   const auto t_start = Clock::now();
   RunReport report;
+  // --resume: the checkpoint of the earlier segment replaces the initial state. Everything is
+  // checked before a file is touched (a refused resume is invalid input, exit 2).
+  Checkpoint resumed;
+  double t0 = 0;
+  if (opt.resume) {
+    if (opt.output_dir.empty()) throw std::logic_error("resume without an output directory");
+    ResumeSource src = readResumeSource(opt.output_dir, header_.name);
+    const std::string where = opt.output_dir + "/" + header_.name + ".h5";
+    const std::string diff = firstSceneDifference(src.scene_toml, resolved_scene_, {"time", "output", "checks", "integrator"});
+    if (!diff.empty())
+      throw InputError("--resume: the scene differs from the one " + where + " was written with at '" + diff +
+                       "'; only [time], [output], [checks] and [integrator] may change between the segments of a run");
+    if (system_.mayResize())
+      throw InputError("--resume: not implemented for scenes with [inflow] or [outflow] (the particle set changes "
+                       "during the run and is rebuilt from the scene, not from the checkpoint)");
+    if (src.checkpoint.id != system_.particles.id || src.checkpoint.state.size() != y_.size())
+      throw InputError("--resume: the checkpoint in " + where + " belongs to another particle set (" +
+                       std::to_string(src.checkpoint.id.size()) + " particles, state of " +
+                       std::to_string(src.checkpoint.state.size()) + " values; the scene builds " +
+                       std::to_string(system_.particles.size()) + " and " + std::to_string(y_.size()) + ")");
+    if (!(src.checkpoint.time < t_end_ * (1 + 1e-12)))
+      throw InputError("--resume: the checkpoint is at t = " + std::to_string(src.checkpoint.time) +
+                       " s, beyond time.end = " + std::to_string(t_end_) + " s; raise time.end to go on");
+    resumed = std::move(src.checkpoint);
+    y_ = resumed.state;
+    t0 = resumed.time;
+    system_.unpack(y_.data());
+  }
   std::unique_ptr<OutputWriter<D>> writer;
-  if (!opt.output_dir.empty())
-    writer = std::make_unique<OutputWriter<D>>(opt.output_dir, header_.name,
-                                               FileAttributes{D, resolved_scene_, dx_, system_.kernel.h,
-                                                              std::string(kernelName(system_.kernel.type)), hookColumns()});
+  if (!opt.output_dir.empty()) {
+    const FileAttributes attrs{D, resolved_scene_, dx_, system_.kernel.h, std::string(kernelName(system_.kernel.type)), hookColumns()};
+    writer = opt.resume ? std::make_unique<OutputWriter<D>>(opt.output_dir, header_.name, attrs, t0)
+                        : std::make_unique<OutputWriter<D>>(opt.output_dir, header_.name, attrs);
+  }
   std::vector<DiagnosticsRow> pending;
   std::vector<double> scratch(y_.size());
-  std::uint64_t steps = 0;
-  double max_dev_seen = 0;
+  std::uint64_t steps = static_cast<std::uint64_t>(resumed.step);
+  double max_dev_seen = resumed.max_density_deviation;
   std::string failure;
-  Progress progress(0.0, t_end_, opt.quiet);
+  Progress progress(t0, t_end_, opt.quiet);
+  // The run's totals include the earlier segments of a resumed run.
+  auto totals = [&](double t, const std::vector<double>& y) {
+    const IntegratorStats st = integrator_->stats();
+    Checkpoint c;
+    c.time = t;
+    c.step = static_cast<std::int64_t>(steps);
+    c.rhs_evals = resumed.rhs_evals + st.rhs_evals;
+    c.rejected_steps = resumed.rejected_steps + st.rejected_steps;
+    c.neighbour_builds = resumed.neighbour_builds + system_.neighbours.builds();
+    c.wall_seconds = resumed.wall_seconds + std::chrono::duration<double>(Clock::now() - t_start).count();
+    c.max_density_deviation = max_dev_seen;
+    c.resumes = resumed.resumes + (opt.resume ? 1 : 0);
+    c.state = y;
+    c.id = system_.particles.id;
+    return c;
+  };
 
   // Derived fields (pressure, wall values) for a frame come from an evaluation at the state.
   double last_frame_time = -1;
@@ -509,10 +554,13 @@ RunReport Simulation<D>::run(const RunOptions& opt) {
     system_.evaluate(t, y.data(), scratch.data());
     writer->writeFrame(t, static_cast<std::int64_t>(steps), system_.particles, pending);
     pending.clear();
+    // Every frame is a restart point. With a changing particle set the checkpoint is still
+    // written (the state is whole) but --resume refuses it (see above).
+    writer->writeCheckpoint(totals(t, y));
   };
 
   last_good_ = y_;
-  last_good_time_ = 0;
+  last_good_time_ = t0;
   system_.observer = [&](double t, double dt, double* y) {
     const DiagnosticsRow row = diagnostics(t, dt, y);
     failure = checkState(row, y);
@@ -542,10 +590,12 @@ RunReport Simulation<D>::run(const RunOptions& opt) {
   RunStatus status = RunStatus::ok;
   std::string message;
   try {
-    for (auto& hk : system_.hooks) hk->start(system_, 0.0, y_.data());
-    integrator_->start(system_, 0.0, y_.data());
-    writeFrame(0.0, y_);
+    for (auto& hk : system_.hooks) hk->start(system_, t0, y_.data());
+    integrator_->start(system_, t0, y_.data());
+    if (opt.resume) last_frame_time = t0;  // the checkpoint's frame is in the file already
+    else writeFrame(0.0, y_);
     for (double tout : output_times_) {
+      if (tout <= t0 * (1 + 1e-12)) continue;  // written by the earlier segment
       const bool reached = integrator_->advance(tout);
       if (!reached) break;
       writeFrame(tout, y_);
@@ -587,7 +637,7 @@ RunReport Simulation<D>::run(const RunOptions& opt) {
   report.final_time = status == RunStatus::diverged ? last_good_time_ : integrator_->time();
   report.wall_seconds = std::chrono::duration<double>(Clock::now() - t_start).count();
 
-  const IntegratorStats st = integrator_->stats();
+  const Checkpoint total = totals(report.final_time, {});
   nlohmann::json& s = report.summary;
   s["status"] = statusName(status);
   s["message"] = report.message;
@@ -595,10 +645,11 @@ RunReport Simulation<D>::run(const RunOptions& opt) {
   s["final_time"] = report.final_time;
   s["end_time"] = t_end_;
   s["steps"] = steps;  // accepted steps (a step that failed the checks is not counted)
-  s["rejected_steps"] = st.rejected_steps;
-  s["rhs_evals"] = st.rhs_evals;
-  s["neighbour_builds"] = system_.neighbours.builds();
-  s["wall_seconds"] = report.wall_seconds;
+  s["rejected_steps"] = total.rejected_steps;
+  s["rhs_evals"] = total.rhs_evals;
+  s["neighbour_builds"] = total.neighbour_builds;
+  s["wall_seconds"] = total.wall_seconds;
+  if (opt.resume) s["resumed"] = {{"from_time", t0}, {"count", total.resumes}, {"segment_wall_seconds", report.wall_seconds}};
   s["particles"] = system_.particles.size();
   s["fluid_particles"] = system_.particles.n_moving;
   s["integrator"] = integrator_name_;

@@ -21,6 +21,12 @@ namespace vesph {
 
 class ConfigTable;
 
+// Compares two resolved scenes (TOML text, as Config::resolvedToml writes them) and returns the
+// dotted path of the first key whose value differs, or that one has and the other lacks,
+// outside the top-level tables named in `free`; empty when they agree. `vesph run --resume`
+// uses it: only [time], [output], [checks] and [integrator] may change between the segments.
+std::string firstSceneDifference(const std::string& a, const std::string& b, const std::set<std::string>& free);
+
 class Config {
  public:
   // Parses FILE and applies --set overrides ("dotted.key=value", the value in TOML syntax;

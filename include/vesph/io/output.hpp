@@ -32,10 +32,39 @@ struct FileAttributes {
   std::vector<std::string> extra_columns;  // diagnostics columns after the standard ones
 };
 
+// The restart point of a run (`vesph run --resume`), kept in /checkpoint of the HDF5 file and
+// replaced with every frame: the ODE state vector of the integrator (positions | densities |
+// velocities | evolving fields, StateSegments) at the frame's time, the ids of the particle set
+// it belongs to, and the run's totals so far, so that a resumed run reports the whole run.
+struct Checkpoint {
+  double time = 0;                  // s, the time of the frame it was written with
+  std::int64_t step = 0;            // accepted steps so far
+  std::uint64_t rhs_evals = 0, rejected_steps = 0, neighbour_builds = 0;
+  double wall_seconds = 0;          // s, wall-clock time of the run so far (all segments)
+  double max_density_deviation = 0; // largest over the accepted steps so far
+  std::uint64_t resumes = 0;        // how often the run was resumed before
+  std::vector<double> state;
+  std::vector<std::uint64_t> id;
+};
+
+// What `--resume` needs from an existing output: the resolved scene the file was written with
+// and its checkpoint. Throws InputError when DIR/<name>.h5 is missing, is not a vesph-1 file or
+// holds no checkpoint (files of vesph versions before checkpoints).
+struct ResumeSource {
+  std::string scene_toml;
+  Checkpoint checkpoint;
+};
+ResumeSource readResumeSource(const std::string& dir, const std::string& name);
+
 template <int D>
 class OutputWriter {
  public:
   OutputWriter(const std::string& dir, const std::string& name, const FileAttributes& attrs);
+  // Reopens the file of a run to go on from its checkpoint at resume_time: the frames after
+  // that time and the diagnostics rows after it are dropped (the resumed run writes them
+  // again), the scene attribute is replaced by attrs.scene_toml, and frames and rows are then
+  // appended. The diagnostics columns must be those of attrs.
+  OutputWriter(const std::string& dir, const std::string& name, const FileAttributes& attrs, double resume_time);
   ~OutputWriter();
   OutputWriter(const OutputWriter&) = delete;
   OutputWriter& operator=(const OutputWriter&) = delete;
@@ -44,6 +73,8 @@ class OutputWriter {
   // box) and the diagnostics rows gathered since the last frame; flushes everything to disk.
   void writeFrame(double time, std::int64_t step, const ParticleSet<D>& p,
                   const std::vector<DiagnosticsRow>& new_rows);
+  // Replaces the checkpoint (/checkpoint); flushed. Called after the frame of the same state.
+  void writeCheckpoint(const Checkpoint& c);
   std::size_t frames() const { return frames_.size(); }
   const std::string& h5Path() const { return h5_path_; }
   const std::string& xdmfPath() const { return xdmf_path_; }

@@ -34,6 +34,9 @@ struct RunOptions {
   bool quiet = false;
   bool progress = true;
   std::uint64_t max_steps = 0;  // 0: run to the end time; otherwise stop after this many steps
+  // Go on from the checkpoint in output_dir (the state of its last frame) instead of the
+  // initial state, appending to its files (`vesph run --resume`).
+  bool resume = false;
 };
 
 struct RunReport {
