@@ -174,6 +174,17 @@ ResumeSource readResumeSource(const std::string& dir, const std::string& name) {
     c.resumes = readAttrScalar<std::uint64_t>(g, "resumes", H5T_NATIVE_UINT64);
     c.state = readVector<double>(g, "state", H5T_NATIVE_DOUBLE);
     c.id = readVector<std::uint64_t>(g, "id", H5T_NATIVE_UINT64);
+    if (H5Lexists(g, "arrays", H5P_DEFAULT) > 0) {
+      hid_t arr = checkId(H5Gopen2(g, "arrays", H5P_DEFAULT), "checkpoint arrays");
+      H5G_info_t info;
+      check(H5Gget_info(arr, &info), "checkpoint arrays");
+      for (hsize_t k = 0; k < info.nlinks; ++k) {
+        char aname[256];
+        if (H5Lget_name_by_idx(arr, ".", H5_INDEX_NAME, H5_ITER_INC, k, aname, sizeof aname, H5P_DEFAULT) < 0) continue;
+        c.arrays.emplace_back(aname, readVector<double>(arr, aname, H5T_NATIVE_DOUBLE));
+      }
+      H5Gclose(arr);
+    }
     H5Gclose(g);
   } catch (...) {
     H5Fclose(file);
@@ -238,6 +249,14 @@ void OutputWriter<D>::writeCheckpoint(const Checkpoint& c) {
                 : checkId(H5Gcreate2(file_, "checkpoint", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), "checkpoint");
   writeResizable(g, "state", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, c.state.data(), c.state.size());
   writeResizable(g, "id", H5T_STD_U64LE, H5T_NATIVE_UINT64, c.id.data(), c.id.size());
+  if (!c.arrays.empty()) {
+    hid_t arr = H5Lexists(g, "arrays", H5P_DEFAULT) > 0
+                    ? checkId(H5Gopen2(g, "arrays", H5P_DEFAULT), "checkpoint arrays")
+                    : checkId(H5Gcreate2(g, "arrays", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), "checkpoint arrays");
+    for (const auto& [aname, values] : c.arrays)
+      writeResizable(arr, aname.c_str(), H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, values.data(), values.size());
+    H5Gclose(arr);
+  }
   replaceAttrScalar<std::int64_t>(g, "step", H5T_NATIVE_INT64, c.step);
   replaceAttrScalar<std::uint64_t>(g, "rhs_evals", H5T_NATIVE_UINT64, c.rhs_evals);
   replaceAttrScalar<std::uint64_t>(g, "rejected_steps", H5T_NATIVE_UINT64, c.rejected_steps);

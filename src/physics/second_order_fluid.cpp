@@ -208,6 +208,12 @@ class SecondOrderFluid final : public PairEffect<D, SecondOrderFluid<D>> {
     }
   }
 
+  void persistentArrays(std::vector<std::pair<std::string, std::vector<double>*>>& out) override {
+    if (!lagged_) return;
+    out.emplace_back("lagged_acceleration", &accel_->data);
+    out.emplace_back("previous_velocity", &previous_velocity_);
+  }
+
   void resized(const ParticleSet<D>& p, const ParticleRemap& remap) override {
     if (!lagged_) return;
     // A released particle starts with its velocity as the previous one (no lagged rate yet

@@ -510,6 +510,15 @@ RunReport Simulation<D>::run(const RunOptions& opt) {
     if (!(src.checkpoint.time < t_end_ * (1 + 1e-12)))
       throw InputError("--resume: the checkpoint is at t = " + std::to_string(src.checkpoint.time) +
                        " s, beyond time.end = " + std::to_string(t_end_) + " s; raise time.end to go on");
+    // Between-step arrays of effects (the lagged SOF acceleration) go back where they were.
+    for (auto& [aname, target] : persistentArrays()) {
+      const auto it = std::find_if(src.checkpoint.arrays.begin(), src.checkpoint.arrays.end(),
+                                   [&](const auto& a) { return a.first == aname; });
+      if (it == src.checkpoint.arrays.end() || it->second.size() != target->size())
+        throw InputError("--resume: the checkpoint in " + where + " lacks the between-step array '" + aname +
+                         "' of this scene (or it has another size)");
+      *target = it->second;
+    }
     resumed = std::move(src.checkpoint);
     y_ = resumed.state;
     t0 = resumed.time;
@@ -541,6 +550,13 @@ RunReport Simulation<D>::run(const RunOptions& opt) {
     c.resumes = resumed.resumes + (opt.resume ? 1 : 0);
     c.state = y;
     c.id = system_.particles.id;
+    if (!y.empty()) {
+      for (auto& [aname, values] : persistentArrays()) c.arrays.emplace_back(aname, *values);
+      // The integrator's carried rate belongs to the state it integrates, y_, which is the
+      // frame's state except after a divergence (then the last good state: nothing carried).
+      std::vector<double> carried = integrator_->carried();
+      if (!carried.empty() && &y == &y_ && integrator_->time() == t) c.arrays.emplace_back("integrator.carried", std::move(carried));
+    }
     return c;
   };
 
@@ -592,7 +608,11 @@ RunReport Simulation<D>::run(const RunOptions& opt) {
   try {
     for (auto& hk : system_.hooks) hk->start(system_, t0, y_.data());
     integrator_->start(system_, t0, y_.data());
-    if (opt.resume) last_frame_time = t0;  // the checkpoint's frame is in the file already
+    if (opt.resume) {
+      last_frame_time = t0;  // the checkpoint's frame is in the file already
+      for (const auto& [aname, values] : resumed.arrays)
+        if (aname == "integrator.carried") integrator_->restoreCarried(values);
+    }
     else writeFrame(0.0, y_);
     for (double tout : output_times_) {
       if (tout <= t0 * (1 + 1e-12)) continue;  // written by the earlier segment
@@ -675,6 +695,17 @@ RunReport Simulation<D>::run(const RunOptions& opt) {
     }
   }
   return report;
+}
+
+template <int D>
+std::vector<std::pair<std::string, std::vector<double>*>> Simulation<D>::persistentArrays() {
+  std::vector<std::pair<std::string, std::vector<double>*>> all, one;
+  for (auto& e : system_.effects) {
+    one.clear();
+    e->persistentArrays(one);
+    for (auto& [aname, values] : one) all.emplace_back(std::string(e->name()) + "." + aname, values);
+  }
+  return all;
 }
 
 template <int D>

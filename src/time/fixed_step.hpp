@@ -54,6 +54,11 @@ class FixedStepIntegrator : public Integrator {
     return true;
   }
 
+  std::vector<double> carried() const override { return rate_; }
+  void restoreCarried(const std::vector<double>& values) override {
+    if (values.size() == rate_.size()) rate_ = values;
+  }
+
   double time() const override { return t_; }
   double lastStep() const override { return last_dt_; }
   IntegratorStats stats() const override { return stats_; }

@@ -6,6 +6,7 @@
 #include <array>
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -45,6 +46,8 @@ struct Checkpoint {
   std::uint64_t resumes = 0;        // how often the run was resumed before
   std::vector<double> state;
   std::vector<std::uint64_t> id;
+  // Between-step arrays of effects (Effect::persistentArrays), named "<effect>.<array>".
+  std::vector<std::pair<std::string, std::vector<double>>> arrays;
 };
 
 // What `--resume` needs from an existing output: the resolved scene the file was written with

@@ -14,6 +14,7 @@
 //              (a pair pass first runs Effect::prepare of the effects that ask for it)
 //   external   per particle: body forces
 #include <span>
+#include <utility>
 #include <string>
 #include <vector>
 #include <string_view>
@@ -158,6 +159,11 @@ class Effect {
   // some; ParticleRemap). The particle set has remapped its arrays and fields already; an
   // effect that keeps other per-particle values from step to step rearranges them here.
   virtual void resized(const ParticleSet<D>& particles, const ParticleRemap& remap) {}
+  // The arrays an effect carries from one accepted step to the next (afterStep), which the ODE
+  // state does not hold, by name: `vesph run --resume` stores them with every checkpoint and
+  // writes them back before the run goes on (src/sim/simulation.cpp). An effect with such state
+  // must list it here, or a resumed run would start from the values of the initial state.
+  virtual void persistentArrays(std::vector<std::pair<std::string, std::vector<double>*>>& out) {}
 
   // Per-particle preparation for a pair effect, for values that the pair term reads for every
   // neighbour j and that are expensive per pair (the artificial stress R_j, Fang eqs. 40-44):

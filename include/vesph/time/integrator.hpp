@@ -112,6 +112,14 @@ class Integrator {
   virtual IntegratorStats stats() const = 0;
   // Nominal order of accuracy (for convergence studies and tests).
   virtual int order() const = 0;
+  // What the integrator carries from one step to the next besides the state (checkpoints,
+  // `vesph run --resume`): the fixed-step integrators' rate F^n, which comes from the last
+  // evaluation of the previous step (the leapfrog's corrector, at rho^{n+1/2}) and is not a
+  // function of y^n alone. restoreCarried, called right after start, replaces what start
+  // computed; a vector of the wrong size is ignored (start's own value stays). ARKODE carries
+  // nothing: a resumed segment starts with a fresh step-size estimate.
+  virtual std::vector<double> carried() const { return {}; }
+  virtual void restoreCarried(const std::vector<double>& values) {}
 };
 
 struct IntegratorEntry {
