@@ -242,6 +242,25 @@ void InflowOutflow<D>::resized(SphSystem<D>& system, const ParticleRemap& remap)
 }
 
 template <int D>
+void InflowOutflow<D>::saveCarried(typename StepHook<D>::NamedArrays& out) const {
+  out.emplace_back("totals", std::vector<double>{static_cast<double>(released_), static_cast<double>(removed_)});
+  if (!lane_speed_.empty()) out.emplace_back("lane_speed", lane_speed_);
+}
+
+template <int D>
+void InflowOutflow<D>::restoreCarried(const std::function<const std::vector<double>*(const std::string&)>& find) {
+  const std::vector<double>* totals = find("totals");
+  if (!totals || totals->size() != 2) throw InputError("--resume: the checkpoint lacks the inflow/outflow totals");
+  released_ = static_cast<std::uint64_t>((*totals)[0]);
+  removed_ = static_cast<std::uint64_t>((*totals)[1]);
+  if (!lane_speed_.empty()) {
+    const std::vector<double>* speeds = find("lane_speed");
+    if (!speeds || speeds->size() != lane_speed_.size()) throw InputError("--resume: the checkpoint lacks the inflow lanes' speeds");
+    lane_speed_ = *speeds;
+  }
+}
+
+template <int D>
 void InflowOutflow<D>::diagnostics(std::vector<double>& values) const {
   // The row of a step counts that step's changes (made right after it).
   values.push_back(static_cast<double>(released_ + release_.size()));

@@ -230,8 +230,21 @@ OutputWriter<D>::OutputWriter(const std::string& dir, const std::string& name, c
   std::vector<std::string> columns(std::begin(kDiagColumns), std::end(kDiagColumns));
   for (const std::string& c : extra_columns_) columns.push_back(c);
   for (const std::string& col : columns) {
-    if (H5Lexists(diag, col.c_str(), H5P_DEFAULT) <= 0)
-      throw std::runtime_error(h5_path_ + ": /diagnostics has no column '" + col + "' to append to");
+    if (H5Lexists(diag, col.c_str(), H5P_DEFAULT) <= 0) {
+      // A hook column the earlier segments did not have: only `escaped`, when
+      // checks.leave_domain became "remove" on resume; nothing escaped before, so its rows are 0.
+      hsize_t dims[1] = {diag_rows_}, maxdims[1] = {H5S_UNLIMITED}, chunk[1] = {4096};
+      hid_t space = H5Screate_simple(1, dims, maxdims);
+      hid_t plist = H5Pcreate(H5P_DATASET_CREATE);
+      H5Pset_chunk(plist, 1, chunk);
+      hid_t d = checkId(H5Dcreate2(diag, col.c_str(), H5T_IEEE_F64LE, space, H5P_DEFAULT, plist, H5P_DEFAULT), col.c_str());
+      const std::vector<double> zeros(diag_rows_, 0.0);
+      if (diag_rows_) check(H5Dwrite(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, zeros.data()), col.c_str());
+      H5Dclose(d);
+      H5Pclose(plist);
+      H5Sclose(space);
+      continue;
+    }
     hid_t d = checkId(H5Dopen2(diag, col.c_str(), H5P_DEFAULT), col.c_str());
     hsize_t size[1] = {diag_rows_};
     check(H5Dset_extent(d, size), "truncate diagnostics");

@@ -10,6 +10,7 @@
 #include <sstream>
 #include <tuple>
 
+#include "vesph/boundary/domain_exit.hpp"
 #include "vesph/boundary/dummy_walls.hpp"
 #include "vesph/boundary/inflow_outflow.hpp"
 #include "vesph/io/progress.hpp"
@@ -126,6 +127,10 @@ Simulation<D>::Simulation(Config& config, const SceneHeader& header) : config_(c
   // no sound-speed rule gives one (ISPH scenes).
   const double inflow_speed = flow ? flow->prescribedPeakSpeed() : 0.0;
   if (flow) system_.hooks.push_back(std::move(flow));  // after the projection (DESIGN.md hook order)
+  // What happens to a fluid particle that leaves the domain: the run stops (a numerical
+  // failure, the default) or the particle is removed and counted (splashes).
+  leave_domain_remove_ = root.table("checks").choice("leave_domain", "stop", {"stop", "remove"}) == "remove";
+  if (leave_domain_remove_) system_.hooks.push_back(std::make_unique<DomainExit<D>>());
 
   // Time, integrator, output, checks.
   ConfigTable time = root.table("time", false);
@@ -449,7 +454,7 @@ std::string Simulation<D>::checkState(const DiagnosticsRow& row, const double* y
        << " m/s (for WCSPH the sound speed) at t = " << row.time << " s";
     return os.str();
   }
-  for (std::size_t i = 0; i < n; ++i)
+  for (std::size_t i = 0; i < n && !leave_domain_remove_; ++i)
     if (!system_.domain.insideNonPeriodic(y + D * i)) {
       os << "fluid particle id " << system_.particles.id[i] << " left the domain at t = " << row.time << " s";
       return os.str();
@@ -499,25 +504,69 @@ RunReport Simulation<D>::run(const RunOptions& opt) {
     if (!diff.empty())
       throw InputError("--resume: the scene differs from the one " + where + " was written with at '" + diff +
                        "'; only [time], [output], [checks] and [integrator] may change between the segments of a run");
-    if (system_.mayResize())
-      throw InputError("--resume: not implemented for scenes with [inflow] or [outflow] (the particle set changes "
-                       "during the run and is rebuilt from the scene, not from the checkpoint)");
-    if (src.checkpoint.id != system_.particles.id || src.checkpoint.state.size() != y_.size())
-      throw InputError("--resume: the checkpoint in " + where + " belongs to another particle set (" +
-                       std::to_string(src.checkpoint.id.size()) + " particles, state of " +
-                       std::to_string(src.checkpoint.state.size()) + " values; the scene builds " +
-                       std::to_string(system_.particles.size()) + " and " + std::to_string(y_.size()) + ")");
-    if (!(src.checkpoint.time < t_end_ * (1 + 1e-12)))
-      throw InputError("--resume: the checkpoint is at t = " + std::to_string(src.checkpoint.time) +
-                       " s, beyond time.end = " + std::to_string(t_end_) + " s; raise time.end to go on");
+    Checkpoint& ck = src.checkpoint;
+    auto find = [&](const std::string& aname) -> const std::vector<double>* {
+      const auto it = std::find_if(ck.arrays.begin(), ck.arrays.end(), [&](const auto& a) { return a.first == aname; });
+      return it == ck.arrays.end() ? nullptr : &it->second;
+    };
+    auto anotherSet = [&]() {
+      return InputError("--resume: the checkpoint in " + where + " belongs to another particle set (" +
+                        std::to_string(ck.id.size()) + " particles, state of " + std::to_string(ck.state.size()) +
+                        " values; the scene builds " + std::to_string(system_.particles.size()) + " and " +
+                        std::to_string(y_.size()) + ")");
+    };
+    if (!(ck.time < t_end_ * (1 + 1e-12)))
+      throw InputError("--resume: the checkpoint is at t = " + std::to_string(ck.time) + " s, beyond time.end = " +
+                       std::to_string(t_end_) + " s; raise time.end to go on");
+    if (system_.mayResize()) {
+      // The moving set of the checkpoint (released particles in, removed ones out), the fixed
+      // particles' positions and velocities (the inflow buffer moves), the next id and the
+      // hooks' totals.
+      const std::vector<double>* n_moving = find("particles.n_moving");
+      if (!n_moving) {
+        // A checkpoint of a segment whose particle set could not change (written before
+        // checks.leave_domain was switched to "remove"): the set must be the scene's own, and
+        // no hook has counted anything yet.
+        if (ck.id != system_.particles.id) throw anotherSet();
+        for (auto& hk : system_.hooks)
+          hk->restoreCarried([](const std::string&) -> const std::vector<double>* { return nullptr; });
+      } else {
+        const std::vector<double>* position = find("particles.position");
+        const std::vector<double>* velocity = find("particles.velocity");
+        const std::vector<double>* mass = find("particles.mass");
+        const std::vector<double>* next_id = find("system.next_id");
+        if (n_moving->size() != 1 || !position || !velocity || !mass || !next_id || next_id->size() != 1)
+          throw InputError("--resume: the checkpoint in " + where + " lacks part of the particle set of a scene whose particles change");
+        const std::size_t nm = static_cast<std::size_t>((*n_moving)[0]);
+        const std::size_t fixed = system_.particles.nFixed();
+        if (nm > ck.id.size() || ck.id.size() - nm != fixed ||
+            !std::equal(ck.id.begin() + static_cast<std::ptrdiff_t>(nm), ck.id.end(),
+                        system_.particles.id.begin() + static_cast<std::ptrdiff_t>(system_.particles.n_moving)))
+          throw anotherSet();
+        system_.rebuildMovingSet(std::vector<std::uint64_t>(ck.id.begin(), ck.id.begin() + static_cast<std::ptrdiff_t>(nm)));
+        ParticleSet<D>& p = system_.particles;
+        if (position->size() != p.position.size() || velocity->size() != p.velocity.size() || mass->size() != p.mass.size())
+          throw anotherSet();
+        p.position = *position;
+        p.velocity = *velocity;
+        p.mass = *mass;
+        system_.setNextId(static_cast<std::uint64_t>((*next_id)[0]));
+        y_.assign(system_.size(), 0.0);
+        for (auto& hk : system_.hooks)
+          hk->restoreCarried([&](const std::string& aname) { return find(std::string(hk->name()) + "." + aname); });
+      }
+    }
+    if (find("domain_exit.escaped") && !leave_domain_remove_)
+      throw InputError("--resume: the run in " + where + " removes particles that leave the domain; "
+                       "checks.leave_domain cannot go back to \"stop\" (its diagnostics column would end)");
+    if (ck.id != system_.particles.id || ck.state.size() != y_.size()) throw anotherSet();
     // Between-step arrays of effects (the lagged SOF acceleration) go back where they were.
     for (auto& [aname, target] : persistentArrays()) {
-      const auto it = std::find_if(src.checkpoint.arrays.begin(), src.checkpoint.arrays.end(),
-                                   [&](const auto& a) { return a.first == aname; });
-      if (it == src.checkpoint.arrays.end() || it->second.size() != target->size())
+      const std::vector<double>* values = find(aname);
+      if (!values || values->size() != target->size())
         throw InputError("--resume: the checkpoint in " + where + " lacks the between-step array '" + aname +
                          "' of this scene (or it has another size)");
-      *target = it->second;
+      *target = *values;
     }
     resumed = std::move(src.checkpoint);
     y_ = resumed.state;
@@ -552,6 +601,19 @@ RunReport Simulation<D>::run(const RunOptions& opt) {
     c.id = system_.particles.id;
     if (!y.empty()) {
       for (auto& [aname, values] : persistentArrays()) c.arrays.emplace_back(aname, *values);
+      if (system_.mayResize()) {  // the particle set itself is part of the restart point
+        const ParticleSet<D>& p = system_.particles;
+        c.arrays.emplace_back("particles.n_moving", std::vector<double>{static_cast<double>(p.n_moving)});
+        c.arrays.emplace_back("particles.position", p.position);
+        c.arrays.emplace_back("particles.velocity", p.velocity);
+        c.arrays.emplace_back("particles.mass", p.mass);
+        c.arrays.emplace_back("system.next_id", std::vector<double>{static_cast<double>(system_.nextId())});
+        for (const auto& hk : system_.hooks) {
+          typename StepHook<D>::NamedArrays carried_by_hook;
+          hk->saveCarried(carried_by_hook);
+          for (auto& [aname, values] : carried_by_hook) c.arrays.emplace_back(std::string(hk->name()) + "." + aname, std::move(values));
+        }
+      }
       // The integrator's carried rate belongs to the state it integrates, y_, which is the
       // frame's state except after a divergence (then the last good state: nothing carried).
       std::vector<double> carried = integrator_->carried();

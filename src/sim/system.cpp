@@ -1,5 +1,7 @@
 #include "vesph/sim/system.hpp"
 
+#include <unordered_map>
+
 #include <omp.h>
 
 #include <algorithm>
@@ -251,16 +253,43 @@ double* SphSystem<D>::resizeState(double t, double* y) {
     remap_.source.push_back(b);
     remap_.released_ids.push_back(next_id_++);
   }
+  applyRemap();
+  state_buffer->resize(size());
+  pack(state_buffer->data());
+  if (resize_observer) resize_observer(t, state_buffer->data());
+  return state_buffer->data();
+}
+
+template <int D>
+void SphSystem<D>::rebuildMovingSet(const std::vector<std::uint64_t>& moving_ids) {
+  const std::size_t n = particles.n_moving;
+  if (particles.nFixed() == 0) throw std::logic_error("rebuildMovingSet needs a fixed particle to create from");
+  std::unordered_map<std::uint64_t, Index> index_of;
+  for (std::size_t i = 0; i < n; ++i) index_of.emplace(particles.id[i], static_cast<Index>(i));
+  remap_.old_size = particles.size();
+  remap_.old_moving = n;
+  remap_.source.clear();
+  remap_.released_ids.clear();
+  for (std::uint64_t ident : moving_ids) {
+    const auto it = index_of.find(ident);
+    if (it != index_of.end()) {
+      remap_.source.push_back(it->second);
+    } else {
+      remap_.source.push_back(static_cast<Index>(n));  // the first fixed particle's values
+      remap_.released_ids.push_back(ident);
+    }
+  }
+  applyRemap();
+}
+
+template <int D>
+void SphSystem<D>::applyRemap() {
   particles.remapMoving(remap_);
   for (auto& e : effects) e->resized(particles, remap_);
   for (auto& b : boundaries) b->resized(remap_);
   for (auto& hk : hooks) hk->resized(*this, remap_);
   neighbours.update(particles, true);
   driver.prepare(neighbours);
-  state_buffer->resize(size());
-  pack(state_buffer->data());
-  if (resize_observer) resize_observer(t, state_buffer->data());
-  return state_buffer->data();
 }
 
 template class SphSystem<2>;

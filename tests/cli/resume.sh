@@ -57,16 +57,12 @@ expect 0 "ok: finished" -- "$VESPH" run "$SCENE" -o "$WORK/seg" --quiet --resume
 frames=$($PY -c "import h5py,sys; f=h5py.File(sys.argv[1]); print(len(f['frames']), f['frames/000006'].attrs['time'])" "$WORK/seg/$H5")
 [ "$frames" = "7 0.6" ] && pass || fail "extended run: expected 7 frames ending at 0.6 s, got '$frames'"
 
-# 3. Refusals (exit 2, the earlier output untouched): a physics key changed, nothing to resume,
-#    a scene whose particle set changes during the run.
+# 3. Refusals (exit 2, the earlier output untouched): a physics key changed, nothing to resume.
 expect 2 "the scene differs .* at 'fluid.viscosity'; only \[time\], \[output\], \[checks\] and \[integrator\]" -- \
   "$VESPH" run "$SCENE" -o "$WORK/seg" --quiet --resume --set time.end=0.7 --set fluid.viscosity=2e-3
 frames=$($PY -c "import h5py,sys; print(len(h5py.File(sys.argv[1])['frames']))" "$WORK/seg/$H5")
 [ "$frames" = 7 ] && pass || fail "a refused resume changed the file: $frames frames"
 expect 2 "nothing to resume: .*does not exist" -- "$VESPH" run "$SCENE" -o "$WORK/none" --quiet --resume
-FLOW=$SRC/cases/channel_inflow_outflow.toml
-"$VESPH" run "$FLOW" -o "$WORK/flow" --quiet --set time.end=1e-3 >"$WORK/flow.log" 2>&1 || fail "inflow run: $(tail -3 "$WORK/flow.log")"
-expect 2 "not implemented for scenes with \[inflow\] or \[outflow\]" -- "$VESPH" run "$FLOW" -o "$WORK/flow" --quiet --resume --set time.end=2e-3
 
 # 4. A viscoelastic scene (the elastic stress is part of the state) under the leapfrog, split at
 #    an output time, and under ARKODE (adaptive: the resumed segment starts with a fresh step
@@ -117,6 +113,28 @@ for name in ("velocity", "extra_stress"):
     # ARKODE's default relative tolerance is 1e-4 (per step); the two runs take different steps.
     assert err < 1e-3, (name, err)
     print(name, "relative difference", err)
+PYEOF
+done
+
+# 4c. Open boundaries: the particle set changes during the run (released and removed
+#     particles, new ids, the buffer moving); the checkpoint keeps the whole set, the next id
+#     and the totals. Prescribed and extrapolated (body-force) inflow, 74 and 90 particles
+#     released and removed by t = 0.1 s, split at 0.05 s.
+for flow in channel_inflow_outflow channel_open_body_force; do
+  F=$SRC/cases/$flow.toml
+  "$VESPH" run "$F" -o "$WORK/${flow}_full" --quiet --set time.end=0.1 --set output.interval=0.025 >"$WORK/flow.log" 2>&1 ||
+    fail "$flow: $(tail -3 "$WORK/flow.log")"
+  expect 0 "ok: finished" -- "$VESPH" run "$F" -o "$WORK/${flow}_seg" --quiet --set time.end=0.05 --set output.interval=0.025
+  expect 0 "ok: finished" -- "$VESPH" run "$F" -o "$WORK/${flow}_seg" --quiet --set time.end=0.1 --set output.interval=0.025 --resume
+  compare "$WORK/${flow}_full" "$WORK/${flow}_seg" 1e-12 >"$WORK/flow_cmp.log" 2>&1 && pass || fail "segmented $flow run differs: $(tail -3 "$WORK/flow_cmp.log")"
+  $PY - "$WORK/${flow}_full/$flow.h5" "$WORK/${flow}_seg/$flow.h5" >"$WORK/flow_diag.log" 2>&1 <<'PYEOF' && pass || fail "$flow: flow diagnostics differ: $(tail -3 "$WORK/flow_diag.log")"
+import sys
+import h5py, numpy as np
+a, b = (h5py.File(p, "r") for p in sys.argv[1:3])
+for c in ("released", "removed", "fluid_particles"):
+    assert np.array_equal(a["diagnostics/" + c][:], b["diagnostics/" + c][:]), c
+assert a["diagnostics/released"][-1] > 0 and a["diagnostics/removed"][-1] > 0, "nothing released or removed: no test"
+print("released", a["diagnostics/released"][-1], "removed", a["diagnostics/removed"][-1])
 PYEOF
 done
 

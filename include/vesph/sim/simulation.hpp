@@ -86,6 +86,7 @@ class Simulation {
   double dx_ = 0, rho0_ = 0, mu_ = 0, t_end_ = 0;
   std::vector<double> output_times_;
   double max_density_deviation_ = 0.5, max_speed_ = 0;
+  bool leave_domain_remove_ = false;  // [checks] leave_domain = "remove" (DomainExit hook)
   std::string resolved_scene_;
   std::string scheme_ = "wcsph";
   mutable std::vector<double> hook_values_;

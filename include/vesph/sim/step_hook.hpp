@@ -5,7 +5,9 @@
 // so: the fixed-step integrators then evaluate the right-hand side again at the changed state
 // before their next step, and ARKODE recomputes its first stage anyway (a post-process
 // function is always registered, src/time/arkode.cpp).
+#include <functional>
 #include <string>
+#include <utility>
 #include <vector>
 #include <string_view>
 
@@ -48,6 +50,12 @@ class StepHook {
   virtual bool pendingChanges() const { return false; }
   virtual void collectChanges(const SphSystem<D>& system, ParticleChanges& out) {}
   virtual void resized(SphSystem<D>& system, const ParticleRemap& remap) {}
+  // What the hook carries between steps that neither the state nor the particle set holds
+  // (checkpoints, `vesph run --resume`): save appends named arrays, restore reads them back
+  // (`find` returns nullptr for a name the checkpoint lacks).
+  using NamedArrays = std::vector<std::pair<std::string, std::vector<double>>>;
+  virtual void saveCarried(NamedArrays& out) const {}
+  virtual void restoreCarried(const std::function<const std::vector<double>*(const std::string&)>& find) {}
   // Per-step diagnostics columns of this hook (names fixed at setup) and their last values.
   virtual std::vector<std::string> diagnosticsColumns() const { return {}; }
   virtual void diagnostics(std::vector<double>& values) const {}

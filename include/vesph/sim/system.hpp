@@ -50,6 +50,16 @@ class SphSystem final : public OdeSystem {
   bool mayResize() const override;
   bool resizePending() const override;
   double* resizeState(double t, double* y) override;
+  // Checkpoints of scenes whose particle set changes (`vesph run --resume`): the next id a
+  // released particle gets, and the rebuild of the moving set as a checkpoint lists it. The
+  // moving particles become those of `moving_ids`, in that order: a particle of the current
+  // set keeps its values, any other is created (from a fixed particle's values, for the caller
+  // to overwrite with the checkpoint's state) with that id, through the same remap as an
+  // inflow release, so effects, boundaries and hooks follow (resized). The fixed particles
+  // stay as they are.
+  std::uint64_t nextId() const { return next_id_; }
+  void setNextId(std::uint64_t id) { next_id_ = id; }
+  void rebuildMovingSet(const std::vector<std::uint64_t>& moving_ids);
   // The buffer the integrator works on (owned by the Simulation): resizeState resizes it.
   std::vector<double>* state_buffer = nullptr;
   // Called after every particle-count change with the rewritten state (the Simulation's copy
@@ -66,6 +76,8 @@ class SphSystem final : public OdeSystem {
 
  private:
   void particlePass(const std::vector<Effect<D>*>& list, const RhsContext<D>& ctx);
+  // remap_ applied to the particle set, effects, boundaries, hooks and the neighbour structures.
+  void applyRemap();
 
   std::vector<Effect<D>*> state_, gradients_, rates_, forces_, external_;
   std::vector<Field*> evolving_;

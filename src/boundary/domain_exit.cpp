@@ -1,0 +1,58 @@
+#include "vesph/boundary/domain_exit.hpp"
+
+#include "vesph/sim/system.hpp"
+
+namespace vesph {
+
+template <int D>
+void DomainExit<D>::apply(SphSystem<D>& system, double, double, double* y) {
+  remove_.clear();
+  const std::size_t n = system.particles.n_moving;
+  for (std::size_t i = 0; i < n; ++i)
+    if (!system.domain.insideNonPeriodic(y + D * i)) remove_.push_back(static_cast<Index>(i));
+}
+
+template <int D>
+void DomainExit<D>::collectChanges(const SphSystem<D>&, ParticleChanges& out) {
+  out.remove.insert(out.remove.end(), remove_.begin(), remove_.end());
+}
+
+template <int D>
+void DomainExit<D>::resized(SphSystem<D>&, const ParticleRemap&) {
+  escaped_ += remove_.size();
+  remove_.clear();
+}
+
+template <int D>
+void DomainExit<D>::diagnostics(std::vector<double>& values) const {
+  // The row of a step counts that step's removals (made right after it).
+  values.push_back(static_cast<double>(escaped_ + remove_.size()));
+}
+
+template <int D>
+void DomainExit<D>::summarize(nlohmann::json& summary) const {
+  summary["escaped"] = escaped_;
+}
+
+template <int D>
+std::string DomainExit<D>::describe() const {
+  return "# leave_domain = \"remove\": fluid particles outside the domain are removed and counted (escaped)\n";
+}
+
+template <int D>
+void DomainExit<D>::saveCarried(typename StepHook<D>::NamedArrays& out) const {
+  out.emplace_back("escaped", std::vector<double>{static_cast<double>(escaped_)});
+}
+
+template <int D>
+void DomainExit<D>::restoreCarried(const std::function<const std::vector<double>*(const std::string&)>& find) {
+  // Absent in a checkpoint written while leave_domain was "stop" (nothing was removed then).
+  const std::vector<double>* e = find("escaped");
+  if (e && e->size() != 1) throw InputError("--resume: the checkpoint's count of escaped particles is malformed");
+  escaped_ = e ? static_cast<std::uint64_t>((*e)[0]) : 0;
+}
+
+template class DomainExit<2>;
+template class DomainExit<3>;
+
+}  // namespace vesph
