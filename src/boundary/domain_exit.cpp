@@ -40,12 +40,12 @@ std::string DomainExit<D>::describe() const {
 }
 
 template <int D>
-void DomainExit<D>::saveCarried(typename StepHook<D>::NamedArrays& out) const {
+void DomainExit<D>::saveCarried(NamedArrays& out) const {
   out.emplace_back("escaped", std::vector<double>{static_cast<double>(escaped_)});
 }
 
 template <int D>
-void DomainExit<D>::restoreCarried(const std::function<const std::vector<double>*(const std::string&)>& find) {
+void DomainExit<D>::restoreCarried(const ArrayLookup& find) {
   // Absent in a checkpoint written while leave_domain was "stop" (nothing was removed then).
   const std::vector<double>* e = find("escaped");
   if (e && e->size() != 1) throw InputError("--resume: the checkpoint's count of escaped particles is malformed");

@@ -242,13 +242,13 @@ void InflowOutflow<D>::resized(SphSystem<D>& system, const ParticleRemap& remap)
 }
 
 template <int D>
-void InflowOutflow<D>::saveCarried(typename StepHook<D>::NamedArrays& out) const {
+void InflowOutflow<D>::saveCarried(NamedArrays& out) const {
   out.emplace_back("totals", std::vector<double>{static_cast<double>(released_), static_cast<double>(removed_)});
   if (!lane_speed_.empty()) out.emplace_back("lane_speed", lane_speed_);
 }
 
 template <int D>
-void InflowOutflow<D>::restoreCarried(const std::function<const std::vector<double>*(const std::string&)>& find) {
+void InflowOutflow<D>::restoreCarried(const ArrayLookup& find) {
   const std::vector<double>* totals = find("totals");
   if (!totals || totals->size() != 2) throw InputError("--resume: the checkpoint lacks the inflow/outflow totals");
   released_ = static_cast<std::uint64_t>((*totals)[0]);

@@ -126,21 +126,24 @@ std::vector<T> readVector(hid_t loc, const char* name, hid_t mem_type) {
   return v;
 }
 
-// A 1-D dataset that can grow and shrink (chunked, unlimited), created on first use and then
-// overwritten in place: the checkpoint does not make the file grow with every frame.
+// An empty 1-D dataset that can grow and shrink (chunked, unlimited): the diagnostics columns
+// and the checkpoint's arrays. Returns the open dataset.
+hid_t createExtensible(hid_t group, const char* name, hid_t file_type, hsize_t chunk_rows) {
+  hsize_t dims[1] = {0}, maxdims[1] = {H5S_UNLIMITED}, chunk[1] = {chunk_rows};
+  hid_t space = H5Screate_simple(1, dims, maxdims);
+  hid_t plist = H5Pcreate(H5P_DATASET_CREATE);
+  H5Pset_chunk(plist, 1, chunk);
+  hid_t d = H5Dcreate2(group, name, file_type, space, H5P_DEFAULT, plist, H5P_DEFAULT);
+  H5Pclose(plist);
+  H5Sclose(space);
+  return checkId(d, name);
+}
+
+// Writes a whole 1-D extensible dataset, created on first use and then overwritten in place:
+// the checkpoint does not make the file grow with every frame.
 void writeResizable(hid_t group, const char* name, hid_t file_type, hid_t mem_type, const void* data, std::size_t n) {
-  hid_t d;
-  if (H5Lexists(group, name, H5P_DEFAULT) > 0) {
-    d = checkId(H5Dopen2(group, name, H5P_DEFAULT), name);
-  } else {
-    hsize_t dims[1] = {0}, maxdims[1] = {H5S_UNLIMITED}, chunk[1] = {1 << 16};
-    hid_t space = H5Screate_simple(1, dims, maxdims);
-    hid_t plist = H5Pcreate(H5P_DATASET_CREATE);
-    H5Pset_chunk(plist, 1, chunk);
-    d = checkId(H5Dcreate2(group, name, file_type, space, H5P_DEFAULT, plist, H5P_DEFAULT), name);
-    H5Pclose(plist);
-    H5Sclose(space);
-  }
+  const hid_t d = H5Lexists(group, name, H5P_DEFAULT) > 0 ? checkId(H5Dopen2(group, name, H5P_DEFAULT), name)
+                                                          : createExtensible(group, name, file_type, 1 << 16);
   hsize_t size[1] = {n};
   check(H5Dset_extent(d, size), name);
   if (n) check(H5Dwrite(d, mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data), name);
@@ -233,16 +236,9 @@ OutputWriter<D>::OutputWriter(const std::string& dir, const std::string& name, c
     if (H5Lexists(diag, col.c_str(), H5P_DEFAULT) <= 0) {
       // A hook column the earlier segments did not have: only `escaped`, when
       // checks.leave_domain became "remove" on resume; nothing escaped before, so its rows are 0.
-      hsize_t dims[1] = {diag_rows_}, maxdims[1] = {H5S_UNLIMITED}, chunk[1] = {4096};
-      hid_t space = H5Screate_simple(1, dims, maxdims);
-      hid_t plist = H5Pcreate(H5P_DATASET_CREATE);
-      H5Pset_chunk(plist, 1, chunk);
-      hid_t d = checkId(H5Dcreate2(diag, col.c_str(), H5T_IEEE_F64LE, space, H5P_DEFAULT, plist, H5P_DEFAULT), col.c_str());
+      H5Dclose(createExtensible(diag, col.c_str(), H5T_IEEE_F64LE, 4096));
       const std::vector<double> zeros(diag_rows_, 0.0);
-      if (diag_rows_) check(H5Dwrite(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, zeros.data()), col.c_str());
-      H5Dclose(d);
-      H5Pclose(plist);
-      H5Sclose(space);
+      writeResizable(diag, col.c_str(), H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, zeros.data(), zeros.size());
       continue;
     }
     hid_t d = checkId(H5Dopen2(diag, col.c_str(), H5P_DEFAULT), col.c_str());
@@ -302,16 +298,7 @@ OutputWriter<D>::OutputWriter(const std::string& dir, const std::string& name, c
   hid_t diag = checkId(H5Gcreate2(file_, "diagnostics", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), "diagnostics");
   std::vector<const char*> columns(std::begin(kDiagColumns), std::end(kDiagColumns));
   for (const std::string& c : extra_columns_) columns.push_back(c.c_str());
-  for (const char* col : columns) {
-    hsize_t dims[1] = {0}, maxdims[1] = {H5S_UNLIMITED}, chunk[1] = {4096};
-    hid_t space = H5Screate_simple(1, dims, maxdims);
-    hid_t plist = H5Pcreate(H5P_DATASET_CREATE);
-    H5Pset_chunk(plist, 1, chunk);
-    hid_t d = checkId(H5Dcreate2(diag, col, H5T_IEEE_F64LE, space, H5P_DEFAULT, plist, H5P_DEFAULT), col);
-    H5Dclose(d);
-    H5Pclose(plist);
-    H5Sclose(space);
-  }
+  for (const char* col : columns) H5Dclose(createExtensible(diag, col, H5T_IEEE_F64LE, 4096));
   H5Gclose(diag);
   check(H5Fflush(file_, H5F_SCOPE_GLOBAL), "flush");
 }

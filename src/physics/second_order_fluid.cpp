@@ -208,10 +208,20 @@ class SecondOrderFluid final : public PairEffect<D, SecondOrderFluid<D>> {
     }
   }
 
-  void persistentArrays(std::vector<std::pair<std::string, std::vector<double>*>>& out) override {
+  void saveCarried(NamedArrays& out) const override {
     if (!lagged_) return;
-    out.emplace_back("lagged_acceleration", &accel_->data);
-    out.emplace_back("previous_velocity", &previous_velocity_);
+    out.emplace_back("lagged_acceleration", accel_->data);
+    out.emplace_back("previous_velocity", previous_velocity_);
+  }
+  void restoreCarried(const ArrayLookup& find) override {
+    if (!lagged_) return;
+    for (auto [aname, target] : {std::pair{"lagged_acceleration", &accel_->data}, std::pair{"previous_velocity", &previous_velocity_}}) {
+      const std::vector<double>* values = find(aname);
+      if (!values || values->size() != target->size())
+        throw InputError(std::string("--resume: the checkpoint lacks the lagged material derivative's ") + aname +
+                         " (or it has another size)");
+      *target = *values;
+    }
   }
 
   void resized(const ParticleSet<D>& p, const ParticleRemap& remap) override {

@@ -487,92 +487,86 @@ std::string Simulation<D>::describe() const {
   return os.str();
 }
 
+// --resume: the checkpoint in `dir` replaces the initial state (y_, the particle set, the
+// between-step arrays of effects and hooks). Everything is checked before a file is touched:
+// a refused resume is invalid input (exit 2). Returns the checkpoint's totals; its state has
+// moved into y_. The integrator's carried rate is restored after its start (run()).
+template <int D>
+Checkpoint Simulation<D>::resumeFrom(const std::string& dir) {
+  ResumeSource src = readResumeSource(dir, header_.name);
+  const std::string where = dir + "/" + header_.name + ".h5";
+  const std::string diff = firstSceneDifference(src.scene_toml, resolved_scene_, {"time", "output", "checks", "integrator"});
+  if (!diff.empty())
+    throw InputError("--resume: the scene differs from the one " + where + " was written with at '" + diff +
+                     "'; only [time], [output], [checks] and [integrator] may change between the segments of a run");
+  Checkpoint& ck = src.checkpoint;
+  auto find = [&](const std::string& aname) -> const std::vector<double>* {
+    const auto it = std::find_if(ck.arrays.begin(), ck.arrays.end(), [&](const auto& a) { return a.first == aname; });
+    return it == ck.arrays.end() ? nullptr : &it->second;
+  };
+  auto anotherSet = [&]() {
+    return InputError("--resume: the checkpoint in " + where + " belongs to another particle set (" +
+                      std::to_string(ck.id.size()) + " particles, state of " + std::to_string(ck.state.size()) +
+                      " values; the scene builds " + std::to_string(system_.particles.size()) + " and " +
+                      std::to_string(y_.size()) + ")");
+  };
+  if (!(ck.time < t_end_ * (1 + 1e-12)))
+    throw InputError("--resume: the checkpoint is at t = " + std::to_string(ck.time) + " s, beyond time.end = " +
+                     std::to_string(t_end_) + " s; raise time.end to go on");
+  if (system_.mayResize()) {
+    // The moving set of the checkpoint (released particles in, removed ones out), the fixed
+    // particles' positions and velocities (the inflow buffer moves), the next id and the
+    // hooks' totals.
+    const std::vector<double>* n_moving = find("particles.n_moving");
+    if (!n_moving) {
+      // A checkpoint of a segment whose particle set could not change (written before
+      // checks.leave_domain was switched to "remove"): the set must be the scene's own
+      // (checked below with every checkpoint), and no hook has counted anything yet.
+      for (auto& hk : system_.hooks)
+        hk->restoreCarried([](const std::string&) -> const std::vector<double>* { return nullptr; });
+    } else {
+      const std::vector<double>* position = find("particles.position");
+      const std::vector<double>* velocity = find("particles.velocity");
+      const std::vector<double>* mass = find("particles.mass");
+      const std::vector<double>* next_id = find("system.next_id");
+      if (n_moving->size() != 1 || !position || !velocity || !mass || !next_id || next_id->size() != 1)
+        throw InputError("--resume: the checkpoint in " + where + " lacks part of the particle set of a scene whose particles change");
+      // The fixed particles never change; their ids are checked below with the whole set.
+      const std::size_t nm = static_cast<std::size_t>((*n_moving)[0]);
+      if (nm > ck.id.size() || ck.id.size() - nm != system_.particles.nFixed()) throw anotherSet();
+      system_.rebuildMovingSet(std::vector<std::uint64_t>(ck.id.begin(), ck.id.begin() + static_cast<std::ptrdiff_t>(nm)));
+      ParticleSet<D>& p = system_.particles;
+      if (position->size() != p.position.size() || velocity->size() != p.velocity.size() || mass->size() != p.mass.size())
+        throw anotherSet();
+      p.position = *position;
+      p.velocity = *velocity;
+      p.mass = *mass;
+      system_.setNextId(static_cast<std::uint64_t>((*next_id)[0]));
+      y_.assign(system_.size(), 0.0);
+      for (auto& hk : system_.hooks)
+        hk->restoreCarried([&](const std::string& aname) { return find(std::string(hk->name()) + "." + aname); });
+    }
+  }
+  if (find("domain_exit.escaped") && !leave_domain_remove_)
+    throw InputError("--resume: the run in " + where + " removes particles that leave the domain; "
+                     "checks.leave_domain cannot go back to \"stop\" (its diagnostics column would end)");
+  if (ck.id != system_.particles.id || ck.state.size() != y_.size()) throw anotherSet();
+  // Between-step arrays of effects (the lagged SOF acceleration) go back where they were.
+  for (auto& e : system_.effects)
+    e->restoreCarried([&](const std::string& aname) { return find(std::string(e->name()) + "." + aname); });
+  y_ = std::move(ck.state);
+  system_.unpack(y_.data());
+  return std::move(src.checkpoint);
+}
+
 template <int D>
 RunReport Simulation<D>::run(const RunOptions& opt) {
   using Clock = std::chrono::steady_clock;
   const auto t_start = Clock::now();
   RunReport report;
-  // --resume: the checkpoint of the earlier segment replaces the initial state. Everything is
-  // checked before a file is touched (a refused resume is invalid input, exit 2).
-  Checkpoint resumed;
-  double t0 = 0;
-  if (opt.resume) {
-    if (opt.output_dir.empty()) throw std::logic_error("resume without an output directory");
-    ResumeSource src = readResumeSource(opt.output_dir, header_.name);
-    const std::string where = opt.output_dir + "/" + header_.name + ".h5";
-    const std::string diff = firstSceneDifference(src.scene_toml, resolved_scene_, {"time", "output", "checks", "integrator"});
-    if (!diff.empty())
-      throw InputError("--resume: the scene differs from the one " + where + " was written with at '" + diff +
-                       "'; only [time], [output], [checks] and [integrator] may change between the segments of a run");
-    Checkpoint& ck = src.checkpoint;
-    auto find = [&](const std::string& aname) -> const std::vector<double>* {
-      const auto it = std::find_if(ck.arrays.begin(), ck.arrays.end(), [&](const auto& a) { return a.first == aname; });
-      return it == ck.arrays.end() ? nullptr : &it->second;
-    };
-    auto anotherSet = [&]() {
-      return InputError("--resume: the checkpoint in " + where + " belongs to another particle set (" +
-                        std::to_string(ck.id.size()) + " particles, state of " + std::to_string(ck.state.size()) +
-                        " values; the scene builds " + std::to_string(system_.particles.size()) + " and " +
-                        std::to_string(y_.size()) + ")");
-    };
-    if (!(ck.time < t_end_ * (1 + 1e-12)))
-      throw InputError("--resume: the checkpoint is at t = " + std::to_string(ck.time) + " s, beyond time.end = " +
-                       std::to_string(t_end_) + " s; raise time.end to go on");
-    if (system_.mayResize()) {
-      // The moving set of the checkpoint (released particles in, removed ones out), the fixed
-      // particles' positions and velocities (the inflow buffer moves), the next id and the
-      // hooks' totals.
-      const std::vector<double>* n_moving = find("particles.n_moving");
-      if (!n_moving) {
-        // A checkpoint of a segment whose particle set could not change (written before
-        // checks.leave_domain was switched to "remove"): the set must be the scene's own, and
-        // no hook has counted anything yet.
-        if (ck.id != system_.particles.id) throw anotherSet();
-        for (auto& hk : system_.hooks)
-          hk->restoreCarried([](const std::string&) -> const std::vector<double>* { return nullptr; });
-      } else {
-        const std::vector<double>* position = find("particles.position");
-        const std::vector<double>* velocity = find("particles.velocity");
-        const std::vector<double>* mass = find("particles.mass");
-        const std::vector<double>* next_id = find("system.next_id");
-        if (n_moving->size() != 1 || !position || !velocity || !mass || !next_id || next_id->size() != 1)
-          throw InputError("--resume: the checkpoint in " + where + " lacks part of the particle set of a scene whose particles change");
-        const std::size_t nm = static_cast<std::size_t>((*n_moving)[0]);
-        const std::size_t fixed = system_.particles.nFixed();
-        if (nm > ck.id.size() || ck.id.size() - nm != fixed ||
-            !std::equal(ck.id.begin() + static_cast<std::ptrdiff_t>(nm), ck.id.end(),
-                        system_.particles.id.begin() + static_cast<std::ptrdiff_t>(system_.particles.n_moving)))
-          throw anotherSet();
-        system_.rebuildMovingSet(std::vector<std::uint64_t>(ck.id.begin(), ck.id.begin() + static_cast<std::ptrdiff_t>(nm)));
-        ParticleSet<D>& p = system_.particles;
-        if (position->size() != p.position.size() || velocity->size() != p.velocity.size() || mass->size() != p.mass.size())
-          throw anotherSet();
-        p.position = *position;
-        p.velocity = *velocity;
-        p.mass = *mass;
-        system_.setNextId(static_cast<std::uint64_t>((*next_id)[0]));
-        y_.assign(system_.size(), 0.0);
-        for (auto& hk : system_.hooks)
-          hk->restoreCarried([&](const std::string& aname) { return find(std::string(hk->name()) + "." + aname); });
-      }
-    }
-    if (find("domain_exit.escaped") && !leave_domain_remove_)
-      throw InputError("--resume: the run in " + where + " removes particles that leave the domain; "
-                       "checks.leave_domain cannot go back to \"stop\" (its diagnostics column would end)");
-    if (ck.id != system_.particles.id || ck.state.size() != y_.size()) throw anotherSet();
-    // Between-step arrays of effects (the lagged SOF acceleration) go back where they were.
-    for (auto& [aname, target] : persistentArrays()) {
-      const std::vector<double>* values = find(aname);
-      if (!values || values->size() != target->size())
-        throw InputError("--resume: the checkpoint in " + where + " lacks the between-step array '" + aname +
-                         "' of this scene (or it has another size)");
-      *target = *values;
-    }
-    resumed = std::move(src.checkpoint);
-    y_ = resumed.state;
-    t0 = resumed.time;
-    system_.unpack(y_.data());
-  }
+  // --resume: the checkpoint of the earlier segment replaces the initial state.
+  const Checkpoint resumed = opt.resume ? resumeFrom(opt.output_dir) : Checkpoint{};
+  const double t0 = resumed.time;
   std::unique_ptr<OutputWriter<D>> writer;
   if (!opt.output_dir.empty()) {
     const FileAttributes attrs{D, resolved_scene_, dx_, system_.kernel.h, std::string(kernelName(system_.kernel.type)), hookColumns()};
@@ -586,7 +580,7 @@ RunReport Simulation<D>::run(const RunOptions& opt) {
   std::string failure;
   Progress progress(t0, t_end_, opt.quiet);
   // The run's totals include the earlier segments of a resumed run.
-  auto totals = [&](double t, const std::vector<double>& y) {
+  auto totals = [&](double t) {
     const IntegratorStats st = integrator_->stats();
     Checkpoint c;
     c.time = t;
@@ -597,28 +591,33 @@ RunReport Simulation<D>::run(const RunOptions& opt) {
     c.wall_seconds = resumed.wall_seconds + std::chrono::duration<double>(Clock::now() - t_start).count();
     c.max_density_deviation = max_dev_seen;
     c.resumes = resumed.resumes + (opt.resume ? 1 : 0);
+    return c;
+  };
+  // The restart point at a frame: the totals, the state and what is carried between steps.
+  auto checkpointAt = [&](double t, const std::vector<double>& y) {
+    Checkpoint c = totals(t);
     c.state = y;
     c.id = system_.particles.id;
-    if (!y.empty()) {
-      for (auto& [aname, values] : persistentArrays()) c.arrays.emplace_back(aname, *values);
-      if (system_.mayResize()) {  // the particle set itself is part of the restart point
-        const ParticleSet<D>& p = system_.particles;
-        c.arrays.emplace_back("particles.n_moving", std::vector<double>{static_cast<double>(p.n_moving)});
-        c.arrays.emplace_back("particles.position", p.position);
-        c.arrays.emplace_back("particles.velocity", p.velocity);
-        c.arrays.emplace_back("particles.mass", p.mass);
-        c.arrays.emplace_back("system.next_id", std::vector<double>{static_cast<double>(system_.nextId())});
-        for (const auto& hk : system_.hooks) {
-          typename StepHook<D>::NamedArrays carried_by_hook;
-          hk->saveCarried(carried_by_hook);
-          for (auto& [aname, values] : carried_by_hook) c.arrays.emplace_back(std::string(hk->name()) + "." + aname, std::move(values));
-        }
-      }
-      // The integrator's carried rate belongs to the state it integrates, y_, which is the
-      // frame's state except after a divergence (then the last good state: nothing carried).
-      std::vector<double> carried = integrator_->carried();
-      if (!carried.empty() && &y == &y_ && integrator_->time() == t) c.arrays.emplace_back("integrator.carried", std::move(carried));
+    // What effects and hooks carry, named "<effect or hook>.<array>".
+    auto carriedBy = [&](const auto& carrier) {
+      NamedArrays own;
+      carrier->saveCarried(own);
+      for (auto& [aname, values] : own) c.arrays.emplace_back(std::string(carrier->name()) + "." + aname, std::move(values));
+    };
+    for (const auto& e : system_.effects) carriedBy(e);
+    if (system_.mayResize()) {  // the particle set itself is part of the restart point
+      const ParticleSet<D>& p = system_.particles;
+      c.arrays.emplace_back("particles.n_moving", std::vector<double>{static_cast<double>(p.n_moving)});
+      c.arrays.emplace_back("particles.position", p.position);
+      c.arrays.emplace_back("particles.velocity", p.velocity);
+      c.arrays.emplace_back("particles.mass", p.mass);
+      c.arrays.emplace_back("system.next_id", std::vector<double>{static_cast<double>(system_.nextId())});
+      for (const auto& hk : system_.hooks) carriedBy(hk);
     }
+    // The integrator's carried rate belongs to the state it integrates, y_, which is the
+    // frame's state except after a divergence (then the last good state: nothing carried).
+    std::vector<double> carried = integrator_->carried();
+    if (!carried.empty() && &y == &y_ && integrator_->time() == t) c.arrays.emplace_back("integrator.carried", std::move(carried));
     return c;
   };
 
@@ -634,7 +633,7 @@ RunReport Simulation<D>::run(const RunOptions& opt) {
     pending.clear();
     // Every frame is a restart point. With a changing particle set the checkpoint is still
     // written (the state is whole) but --resume refuses it (see above).
-    writer->writeCheckpoint(totals(t, y));
+    writer->writeCheckpoint(checkpointAt(t, y));
   };
 
   last_good_ = y_;
@@ -719,7 +718,7 @@ RunReport Simulation<D>::run(const RunOptions& opt) {
   report.final_time = status == RunStatus::diverged ? last_good_time_ : integrator_->time();
   report.wall_seconds = std::chrono::duration<double>(Clock::now() - t_start).count();
 
-  const Checkpoint total = totals(report.final_time, {});
+  const Checkpoint total = totals(report.final_time);
   nlohmann::json& s = report.summary;
   s["status"] = statusName(status);
   s["message"] = report.message;
@@ -757,17 +756,6 @@ RunReport Simulation<D>::run(const RunOptions& opt) {
     }
   }
   return report;
-}
-
-template <int D>
-std::vector<std::pair<std::string, std::vector<double>*>> Simulation<D>::persistentArrays() {
-  std::vector<std::pair<std::string, std::vector<double>*>> all, one;
-  for (auto& e : system_.effects) {
-    one.clear();
-    e->persistentArrays(one);
-    for (auto& [aname, values] : one) all.emplace_back(std::string(e->name()) + "." + aname, values);
-  }
-  return all;
 }
 
 template <int D>

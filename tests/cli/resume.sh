@@ -87,7 +87,7 @@ print("same final frame")
 PYEOF
 
 # 4b. An effect with between-step state (the second-order fluid's lagged material derivative
-#     keeps the last step's acceleration and velocity: Effect::persistentArrays) is restored too.
+#     keeps the last step's acceleration and velocity: Effect::saveCarried / restoreCarried) is restored too.
 SOF=$SRC/cases/startup_channel_second_order_fluid.toml
 LAG="--set effects.second_order_fluid.material_derivative=lagged --set effects.second_order_fluid.alpha1=-5e-5 --set output.interval=5e-4"
 # shellcheck disable=SC2086

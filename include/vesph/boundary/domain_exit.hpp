@@ -28,8 +28,8 @@ class DomainExit final : public StepHook<D> {
   void diagnostics(std::vector<double>& values) const override;
   void summarize(nlohmann::json& summary) const override;
   std::string describe() const override;
-  void saveCarried(typename StepHook<D>::NamedArrays& out) const override;
-  void restoreCarried(const std::function<const std::vector<double>*(const std::string&)>& find) override;
+  void saveCarried(NamedArrays& out) const override;
+  void restoreCarried(const ArrayLookup& find) override;
 
  private:
   std::vector<Index> remove_;

@@ -68,8 +68,8 @@ class InflowOutflow final : public StepHook<D> {
   // Checkpoints: the release/removal totals and the lanes' last extrapolated speeds (a lane
   // with no fluid at the inlet keeps its last speed). The buffer particles' positions are in
   // the particle set, which the checkpoint keeps whole for such scenes.
-  void saveCarried(typename StepHook<D>::NamedArrays& out) const override;
-  void restoreCarried(const std::function<const std::vector<double>*(const std::string&)>& find) override;
+  void saveCarried(NamedArrays& out) const override;
+  void restoreCarried(const ArrayLookup& find) override;
 
   bool extrapolatedVelocity() const { return extrapolated_; }
   // The largest prescribed buffer speed (1.5 U for the parabola, U uniform), m/s; 0 without

@@ -46,7 +46,8 @@ struct Checkpoint {
   std::uint64_t resumes = 0;        // how often the run was resumed before
   std::vector<double> state;
   std::vector<std::uint64_t> id;
-  // Between-step arrays of effects (Effect::persistentArrays), named "<effect>.<array>".
+  // Arrays carried between steps, by name: "<effect or hook>.<array>" (saveCarried),
+  // "integrator.carried", and for a changing particle set "particles.*", "system.next_id".
   std::vector<std::pair<std::string, std::vector<double>>> arrays;
 };
 

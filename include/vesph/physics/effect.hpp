@@ -13,6 +13,7 @@
 //   forces     pair pass: continuity, pressure gradient, viscous and stress terms, stabilisers
 //              (a pair pass first runs Effect::prepare of the effects that ask for it)
 //   external   per particle: body forces
+#include <functional>
 #include <span>
 #include <utility>
 #include <string>
@@ -77,6 +78,11 @@ struct StabilityInputs {
   double elastic_wave_speed = 0;   // sqrt(G/rho) of elastic models, m/s
   double relaxation_time = 0;      // shortest relaxation time, s (0: none)
 };
+
+// Named arrays carried between steps (checkpoints, `vesph run --resume`): Effect and StepHook
+// save them and look them up by name when restoring.
+using NamedArrays = std::vector<std::pair<std::string, std::vector<double>>>;
+using ArrayLookup = std::function<const std::vector<double>*(const std::string&)>;
 
 template <int D>
 class Effect;
@@ -159,11 +165,14 @@ class Effect {
   // some; ParticleRemap). The particle set has remapped its arrays and fields already; an
   // effect that keeps other per-particle values from step to step rearranges them here.
   virtual void resized(const ParticleSet<D>& particles, const ParticleRemap& remap) {}
-  // The arrays an effect carries from one accepted step to the next (afterStep), which the ODE
-  // state does not hold, by name: `vesph run --resume` stores them with every checkpoint and
-  // writes them back before the run goes on (src/sim/simulation.cpp). An effect with such state
-  // must list it here, or a resumed run would start from the values of the initial state.
-  virtual void persistentArrays(std::vector<std::pair<std::string, std::vector<double>*>>& out) {}
+  // What an effect carries from one accepted step to the next (afterStep) that the ODE state
+  // does not hold: `vesph run --resume` stores it with every checkpoint (saveCarried appends
+  // named arrays) and writes it back before the run goes on (restoreCarried; `find` gives
+  // nullptr for a name the checkpoint lacks). An effect with such state must implement both,
+  // or a resumed run would start from the values of the initial state. Hooks have the same
+  // pair (StepHook).
+  virtual void saveCarried(NamedArrays& out) const {}
+  virtual void restoreCarried(const ArrayLookup& find) {}
 
   // Per-particle preparation for a pair effect, for values that the pair term reads for every
   // neighbour j and that are expensive per pair (the artificial stress R_j, Fang eqs. 40-44):

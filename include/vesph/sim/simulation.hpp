@@ -73,8 +73,7 @@ class Simulation {
   DiagnosticsRow diagnostics(double t, double dt, const double* y) const;
   std::string checkState(const DiagnosticsRow& row, const double* y) const;
   std::vector<std::string> hookColumns() const;
-  // Effect::persistentArrays of every effect, named "<effect>.<array>" (checkpoints).
-  std::vector<std::pair<std::string, std::vector<double>*>> persistentArrays();
+  Checkpoint resumeFrom(const std::string& dir);
 
   Config& config_;
   SceneHeader header_;

@@ -51,11 +51,9 @@ class StepHook {
   virtual void collectChanges(const SphSystem<D>& system, ParticleChanges& out) {}
   virtual void resized(SphSystem<D>& system, const ParticleRemap& remap) {}
   // What the hook carries between steps that neither the state nor the particle set holds
-  // (checkpoints, `vesph run --resume`): save appends named arrays, restore reads them back
-  // (`find` returns nullptr for a name the checkpoint lacks).
-  using NamedArrays = std::vector<std::pair<std::string, std::vector<double>>>;
+  // (checkpoints, `vesph run --resume`), as Effect::saveCarried / restoreCarried.
   virtual void saveCarried(NamedArrays& out) const {}
-  virtual void restoreCarried(const std::function<const std::vector<double>*(const std::string&)>& find) {}
+  virtual void restoreCarried(const ArrayLookup& find) {}
   // Per-step diagnostics columns of this hook (names fixed at setup) and their last values.
   virtual std::vector<std::string> diagnosticsColumns() const { return {}; }
   virtual void diagnostics(std::vector<double>& values) const {}
