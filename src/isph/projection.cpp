@@ -628,6 +628,39 @@ void Projection<D>::diagnostics(std::vector<double>& v) const {
 }
 
 template <int D>
+void Projection<D>::saveCarried(NamedArrays& out) const {
+  out.emplace_back("pressure", pressure_->data);
+  out.emplace_back("totals", std::vector<double>{
+      static_cast<double>(solves_), static_cast<double>(iterations_total_), static_cast<double>(iterations_max_),
+      residual_max_, assembly_seconds_, solve_seconds_, correction_seconds_, divergence_ratio_max_,
+      static_cast<double>(pressure_system_.pattern_builds), static_cast<double>(cleaning_iterations_total_),
+      static_cast<double>(cleaning_iterations_max_), cleaning_residual_max_, cleaning_seconds_});
+}
+
+template <int D>
+void Projection<D>::restoreCarried(const ArrayLookup& find) {
+  const std::vector<double>* p = find("pressure");
+  const std::vector<double>* t = find("totals");
+  if (!p || !t || p->size() != pressure_->data.size() || t->size() != 13)
+    throw InputError("--resume: the checkpoint lacks the ISPH pressure or solver totals (written by an older vesph?)");
+  pressure_->data = *p;
+  const auto count = [](double v) { return static_cast<std::uint64_t>(v); };
+  solves_ = count((*t)[0]);
+  iterations_total_ = count((*t)[1]);
+  iterations_max_ = static_cast<int>((*t)[2]);
+  residual_max_ = (*t)[3];
+  assembly_seconds_ = (*t)[4];
+  solve_seconds_ = (*t)[5];
+  correction_seconds_ = (*t)[6];
+  divergence_ratio_max_ = (*t)[7];
+  pressure_system_.pattern_builds = count((*t)[8]);
+  cleaning_iterations_total_ = count((*t)[9]);
+  cleaning_iterations_max_ = static_cast<int>((*t)[10]);
+  cleaning_residual_max_ = (*t)[11];
+  cleaning_seconds_ = (*t)[12];
+}
+
+template <int D>
 void Projection<D>::summarize(nlohmann::json& s) const {
   nlohmann::json j;
   j["linear_solver"] = solver_->name();

@@ -518,13 +518,10 @@ Checkpoint Simulation<D>::resumeFrom(const std::string& dir) {
     // particles' positions and velocities (the inflow buffer moves), the next id and the
     // hooks' totals.
     const std::vector<double>* n_moving = find("particles.n_moving");
-    if (!n_moving) {
-      // A checkpoint of a segment whose particle set could not change (written before
-      // checks.leave_domain was switched to "remove"): the set must be the scene's own
-      // (checked below with every checkpoint), and no hook has counted anything yet.
-      for (auto& hk : system_.hooks)
-        hk->restoreCarried([](const std::string&) -> const std::vector<double>* { return nullptr; });
-    } else {
+    // Without it, a checkpoint of a segment whose particle set could not change (written
+    // before checks.leave_domain was switched to "remove"): the set must be the scene's own
+    // (checked below with every checkpoint).
+    if (n_moving) {
       const std::vector<double>* position = find("particles.position");
       const std::vector<double>* velocity = find("particles.velocity");
       const std::vector<double>* mass = find("particles.mass");
@@ -543,8 +540,6 @@ Checkpoint Simulation<D>::resumeFrom(const std::string& dir) {
       p.mass = *mass;
       system_.setNextId(static_cast<std::uint64_t>((*next_id)[0]));
       y_.assign(system_.size(), 0.0);
-      for (auto& hk : system_.hooks)
-        hk->restoreCarried([&](const std::string& aname) { return find(std::string(hk->name()) + "." + aname); });
     }
   }
   if (find("domain_exit.escaped") && !leave_domain_remove_)
@@ -612,8 +607,11 @@ RunReport Simulation<D>::run(const RunOptions& opt) {
       c.arrays.emplace_back("particles.velocity", p.velocity);
       c.arrays.emplace_back("particles.mass", p.mass);
       c.arrays.emplace_back("system.next_id", std::vector<double>{static_cast<double>(system_.nextId())});
-      for (const auto& hk : system_.hooks) carriedBy(hk);
     }
+    // Hooks' arrays are those of the last step taken: after a divergence (the checkpoint holds
+    // the last good state) the ISPH pressure is the failed step's, which the first resumed
+    // step's right-hand side sees before its projection replaces it.
+    for (const auto& hk : system_.hooks) carriedBy(hk);
     // The integrator's carried rate belongs to the state it integrates, y_, which is the
     // frame's state except after a divergence (then the last good state: nothing carried).
     std::vector<double> carried = integrator_->carried();
@@ -668,6 +666,17 @@ RunReport Simulation<D>::run(const RunOptions& opt) {
   std::string message;
   try {
     for (auto& hk : system_.hooks) hk->start(system_, t0, y_.data());
+    if (opt.resume) {
+      // What the hooks carry replaces what their start computed from the state alone (the
+      // ISPH pressure the incremental form starts from, the hooks' totals); a hook's arrays
+      // are absent from a checkpoint written before the hook was switched on.
+      for (auto& hk : system_.hooks)
+        hk->restoreCarried([&](const std::string& aname) -> const std::vector<double>* {
+          const std::string full = std::string(hk->name()) + "." + aname;
+          const auto it = std::find_if(resumed.arrays.begin(), resumed.arrays.end(), [&](const auto& a) { return a.first == full; });
+          return it == resumed.arrays.end() ? nullptr : &it->second;
+        });
+    }
     integrator_->start(system_, t0, y_.data());
     if (opt.resume) {
       last_frame_time = t0;  // the checkpoint's frame is in the file already

@@ -101,6 +101,10 @@ class Projection final : public StepHook<D> {
   void resized(SphSystem<D>& system, const ParticleRemap& remap) override {
     if (previous_pressure_.size() == remap.old_size) remap.apply(previous_pressure_, 1, Field::Range::all);
   }
+  // Checkpoints keep the pressure field (the incremental form's p^n, the iterative solvers'
+  // first guess) and the run's solver totals; on resume they replace what start() computed.
+  void saveCarried(NamedArrays& out) const override;
+  void restoreCarried(const ArrayLookup& find) override;
   std::vector<std::string> diagnosticsColumns() const override;
   void diagnostics(std::vector<double>& values) const override;
   void summarize(nlohmann::json& summary) const override;
