@@ -277,7 +277,7 @@ def extrudate_clusters(h5):
             fr = dsm.read_frame(r, k - 1)
         pos = fr["position"][fr["kind"] == 0]
         m = (pos[:, 0] >= DIE_EXIT - W) & (pos[:, 0] <= 0.28)
-        n, detached, _, _ = clusters(pos[m], 1.5 * r.dx, 5)
+        n, detached, _, _, _ = clusters(pos[m], 1.5 * r.dx, 5)
         return n, detached
     finally:
         r.close()

@@ -23,6 +23,10 @@ Per frame (fluid particles, kind 0)
 -----------------------------------
 - width: max x - min x of all fluid particle centres (m and /D): the spread of the drop. A
   lattice disk has width D (or D - 2 dx) at t = 0: centres, not the outer surface.
+- bulk width: max x - min x of the largest cluster (below): the spread of the drop itself.
+  Particles that the rim leaves behind on the wall as it retracts (or droplets flung off) keep
+  the width of all fluid at the farthest point ever reached; the bulk width retracts with the
+  drop.
 - contact width: max x - min x of the fluid particles with y - y_w <= --contact dx (default
   1.5 dx: the first particle row on the wall sits at y_w + dx/2); 0 with fewer than 2 such
   particles; n_contact counts them.
@@ -206,7 +210,8 @@ class Drop:
 # -------------------------------------------------------------------------- measures
 def clusters(pos, link_dist, min_cluster, min_fragment=0.0):
     """(number of clusters of >= min_cluster particles, detached particles, largest size,
-    fragments: clusters of at least min_fragment of all particles and >= min_cluster)."""
+    fragments: clusters of at least min_fragment of all particles and >= min_cluster,
+    mask of the particles in the largest cluster)."""
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
     from scipy.spatial import cKDTree
@@ -219,7 +224,9 @@ def clusters(pos, link_dist, min_cluster, min_fragment=0.0):
     sizes = np.bincount(labels)
     big = sizes >= min_cluster
     fragment = big & (sizes >= min_fragment * n)
-    return int(np.count_nonzero(big)), int(sizes[~big].sum()), int(sizes.max()), int(np.count_nonzero(fragment))
+    largest = labels == int(np.argmax(sizes))
+    return (int(np.count_nonzero(big)), int(sizes[~big].sum()), int(sizes.max()),
+            int(np.count_nonzero(fragment)), largest)
 
 
 def max_nn_gap(pos):
@@ -321,7 +328,9 @@ def measure(drop, a):
         near = h <= a.contact * dx
         nc = int(np.count_nonzero(near))
         cw = float(x[near].max() - x[near].min()) if nc >= 2 else 0.0
-        ncl, ndet, big, nfrag = clusters(pos, a.link * dx, a.min_cluster, a.min_fragment)
+        ncl, ndet, big, nfrag, in_largest = clusters(pos, a.link * dx, a.min_cluster, a.min_fragment)
+        xb = x[in_largest]
+        bulk = float(xb.max() - xb.min())
         nn = max_nn_gap(pos) / dx
         gm = grid_measures(pos, dx, a.link, a.crack_radius)
         vg = gm["void_gap"] / dx
@@ -333,6 +342,7 @@ def measure(drop, a):
         rows.append({
             "frame": nm, "time_s": t, "tV_D": tvd,
             "width_m": width, "width_D": width / D,
+            "bulk_width_m": bulk, "bulk_width_D": bulk / D,
             "contact_width_m": cw, "contact_width_D": cw / D, "n_contact": nc,
             "height_m": height, "height_D": height / D,
             "volume": vol, "volume_rel_err_first": vol / vol_first - 1.0,
@@ -349,6 +359,7 @@ def measure(drop, a):
 COLUMNS = [  # (key, csv header; {vol} is replaced by volume_m2 / volume_m3)
     ("frame", "frame"), ("time_s", "time_s"), ("tV_D", "tV_over_D"),
     ("width_m", "width_m"), ("width_D", "width_over_D"),
+    ("bulk_width_m", "bulk_width_m"), ("bulk_width_D", "bulk_width_over_D"),
     ("contact_width_m", "contact_width_m"), ("contact_width_D", "contact_width_over_D"),
     ("n_contact", "n_contact"), ("height_m", "height_m"), ("height_D", "height_over_D"),
     ("volume", "{vol}"), ("volume_rel_err_first", "volume_rel_err_first"),
@@ -384,6 +395,7 @@ def plot(png, runs, a, title):
         t = [r["tV_D"] for r in rows]
         col = lambda k: [r[k] for r in rows]  # noqa: E731
         axs[0].plot(t, col("width_D"), "-", color=c, label=f"{label}: all fluid")
+        axs[0].plot(t, col("bulk_width_D"), ":", color=c, label=f"{label}: largest cluster")
         axs[0].plot(t, col("contact_width_D"), "--", color=c, label=f"{label}: contact")
         axs[1].plot(t, col("height_D"), "-", color=c, label=label)
         axs[2].plot(t, [100 * v for v in col("volume_rel_err_first")], "-", color=c,
@@ -441,12 +453,12 @@ def summarize(drop, rows, a, p):
       f" ... {rows[-1]['tV_D']:.4g}" + (f" (--until {a.until:g})" if a.until is not None else ""))
     step = max(1, math.ceil(len(rows) / 16))
     show = sorted(set(range(0, len(rows), step)) | {len(rows) - 1})
-    p(f"   {'tV/D':>6} {'width/D':>8} {'contact/D':>9} {'height/D':>8} {'dV_first%':>9} "
+    p(f"   {'tV/D':>6} {'width/D':>8} {'bulk/D':>7} {'contact/D':>9} {'height/D':>8} {'dV_first%':>9} "
       f"{'dV_disk%':>8} {'clusters':>8} {'detached':>8} {'largest':>7} {'NN gap':>7} "
       f"{'void':>6} {'void%':>6} {'crack%':>6} {'frac':>4}")
     for j in show:
         r = rows[j]
-        p(f"   {r['tV_D']:6.3f} {r['width_D']:8.4f} {r['contact_width_D']:9.4f} "
+        p(f"   {r['tV_D']:6.3f} {r['width_D']:8.4f} {r['bulk_width_D']:7.4f} {r['contact_width_D']:9.4f} "
           f"{r['height_D']:8.4f} {100 * r['volume_rel_err_first']:9.3f} "
           f"{100 * r['volume_rel_err_disk']:8.3f} {r['clusters']:8d} {r['detached']:8d} "
           f"{r['largest_cluster_fraction']:7.4f} {r['max_nn_gap_dx']:7.3f} "

@@ -1340,6 +1340,21 @@ def make_drop_tests(tmp):
         expect("first wall contact: t V/D = 0.625" in out, "contact time", out)
 
     @t
+    def drop_bulk_width_leaves_out_stranded_particles():
+        # a retracted blob (5 rows of 40) and two particles the rim left behind on the wall at
+        # x = -/+30 dx: the width of all fluid reaches them, the bulk width is the blob's
+        blob = np.vstack([np.column_stack([(np.arange(40) - 19.5) * dx, np.full(40, (0.6 + j) * dx)])
+                          for j in range(5)])
+        stranded = np.array([[-30 * dx, 0.6 * dx], [30 * dx, 0.6 * dx]])
+        h5 = write_drop(os.path.join(d, "stranded.h5"), [(0.0, disk), (0.01, np.vstack([blob, stranded]))])
+        rc, out, err, rows = measure(h5)
+        r0, r1 = rows
+        expect(rc == 0 and near(r0["bulk_width_m"], float(r0["width_m"])), f"intact disk {r0}", out + err)
+        expect(near(r1["width_m"], 60 * dx) and near(r1["bulk_width_m"], 39 * dx)
+               and near(r1["bulk_width_over_D"], 39 / 20) and r1["detached"] == "2",
+               f"stranded frame {r1}")
+
+    @t
     def drop_split_disk_two_clusters():
         half = disk[np.abs(K[:, 0]) > 1]            # columns -1, 0, 1 removed: gap 4 dx
         h5 = write_drop(os.path.join(d, "split.h5"), [(0.0, disk), (0.01, half)])
