@@ -141,9 +141,10 @@ hid_t createExtensible(hid_t group, const char* name, hid_t file_type, hsize_t c
 
 // Writes a whole 1-D extensible dataset, created on first use and then overwritten in place:
 // the checkpoint does not make the file grow with every frame.
-void writeResizable(hid_t group, const char* name, hid_t file_type, hid_t mem_type, const void* data, std::size_t n) {
+void writeResizable(hid_t group, const char* name, hid_t file_type, hid_t mem_type, const void* data, std::size_t n,
+                    hsize_t chunk_rows = 1 << 16) {
   const hid_t d = H5Lexists(group, name, H5P_DEFAULT) > 0 ? checkId(H5Dopen2(group, name, H5P_DEFAULT), name)
-                                                          : createExtensible(group, name, file_type, 1 << 16);
+                                                          : createExtensible(group, name, file_type, chunk_rows);
   hsize_t size[1] = {n};
   check(H5Dset_extent(d, size), name);
   if (n) check(H5Dwrite(d, mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data), name);
@@ -236,9 +237,8 @@ OutputWriter<D>::OutputWriter(const std::string& dir, const std::string& name, c
     if (H5Lexists(diag, col.c_str(), H5P_DEFAULT) <= 0) {
       // A hook column the earlier segments did not have: only `escaped`, when
       // checks.leave_domain became "remove" on resume; nothing escaped before, so its rows are 0.
-      H5Dclose(createExtensible(diag, col.c_str(), H5T_IEEE_F64LE, 4096));
       const std::vector<double> zeros(diag_rows_, 0.0);
-      writeResizable(diag, col.c_str(), H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, zeros.data(), zeros.size());
+      writeResizable(diag, col.c_str(), H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, zeros.data(), zeros.size(), 4096);
       continue;
     }
     hid_t d = checkId(H5Dopen2(diag, col.c_str(), H5P_DEFAULT), col.c_str());

@@ -488,9 +488,10 @@ std::string Simulation<D>::describe() const {
 }
 
 // --resume: the checkpoint in `dir` replaces the initial state (y_, the particle set, the
-// between-step arrays of effects and hooks). Everything is checked before a file is touched:
-// a refused resume is invalid input (exit 2). Returns the checkpoint's totals; its state has
-// moved into y_. The integrator's carried rate is restored after its start (run()).
+// between-step arrays of effects). Everything is checked before a file is touched: a refused
+// resume is invalid input (exit 2). Returns the checkpoint's totals and carried arrays; its
+// state has moved into y_. What hooks and the integrator carry is restored after their start
+// (run()), which would otherwise overwrite it.
 template <int D>
 Checkpoint Simulation<D>::resumeFrom(const std::string& dir) {
   ResumeSource src = readResumeSource(dir, header_.name);
@@ -500,10 +501,7 @@ Checkpoint Simulation<D>::resumeFrom(const std::string& dir) {
     throw InputError("--resume: the scene differs from the one " + where + " was written with at '" + diff +
                      "'; only [time], [output], [checks] and [integrator] may change between the segments of a run");
   Checkpoint& ck = src.checkpoint;
-  auto find = [&](const std::string& aname) -> const std::vector<double>* {
-    const auto it = std::find_if(ck.arrays.begin(), ck.arrays.end(), [&](const auto& a) { return a.first == aname; });
-    return it == ck.arrays.end() ? nullptr : &it->second;
-  };
+  auto find = [&](const std::string& aname) { return ck.find(aname); };
   auto anotherSet = [&]() {
     return InputError("--resume: the checkpoint in " + where + " belongs to another particle set (" +
                       std::to_string(ck.id.size()) + " particles, state of " + std::to_string(ck.state.size()) +
@@ -629,8 +627,7 @@ RunReport Simulation<D>::run(const RunOptions& opt) {
     system_.evaluate(t, y.data(), scratch.data());
     writer->writeFrame(t, static_cast<std::int64_t>(steps), system_.particles, pending);
     pending.clear();
-    // Every frame is a restart point. With a changing particle set the checkpoint is still
-    // written (the state is whole) but --resume refuses it (see above).
+    // Every frame is a restart point.
     writer->writeCheckpoint(checkpointAt(t, y));
   };
 
@@ -671,17 +668,12 @@ RunReport Simulation<D>::run(const RunOptions& opt) {
       // ISPH pressure the incremental form starts from, the hooks' totals); a hook's arrays
       // are absent from a checkpoint written before the hook was switched on.
       for (auto& hk : system_.hooks)
-        hk->restoreCarried([&](const std::string& aname) -> const std::vector<double>* {
-          const std::string full = std::string(hk->name()) + "." + aname;
-          const auto it = std::find_if(resumed.arrays.begin(), resumed.arrays.end(), [&](const auto& a) { return a.first == full; });
-          return it == resumed.arrays.end() ? nullptr : &it->second;
-        });
+        hk->restoreCarried([&](const std::string& aname) { return resumed.find(std::string(hk->name()) + "." + aname); });
     }
     integrator_->start(system_, t0, y_.data());
     if (opt.resume) {
       last_frame_time = t0;  // the checkpoint's frame is in the file already
-      for (const auto& [aname, values] : resumed.arrays)
-        if (aname == "integrator.carried") integrator_->restoreCarried(values);
+      if (const std::vector<double>* carried = resumed.find("integrator.carried")) integrator_->restoreCarried(*carried);
     }
     else writeFrame(0.0, y_);
     for (double tout : output_times_) {

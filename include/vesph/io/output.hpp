@@ -49,6 +49,12 @@ struct Checkpoint {
   // Arrays carried between steps, by name: "<effect or hook>.<array>" (saveCarried),
   // "integrator.carried", and for a changing particle set "particles.*", "system.next_id".
   std::vector<std::pair<std::string, std::vector<double>>> arrays;
+  // The carried array of that name, or nullptr when the checkpoint has none.
+  const std::vector<double>* find(const std::string& name) const {
+    for (const auto& [aname, values] : arrays)
+      if (aname == name) return &values;
+    return nullptr;
+  }
 };
 
 // What `--resume` needs from an existing output: the resolved scene the file was written with
