@@ -11,6 +11,10 @@ expect 2 "blocks\[1\].max: expected a wall at least one kernel support thick" --
 expect 2 "particles.kernel: expected one of: cubic, quintic, wendland_c2, got \"gauss\"" -- "$VESPH" check "$S" --set particles.kernel=gauss
 expect 2 "domain.periodic: expected an array of 2 booleans" -- "$VESPH" check "$S" --set "domain.periodic=[true]"
 expect 2 "integrator.cfl: expected a number in \[1e-06, 1\]" -- "$VESPH" check "$S" --set integrator.cfl=2
+# the adaptive arkode takes the limits as caps above its error-controlled step: up to 10
+expect 0 "cfl = 4" -- "$VESPH" check "$S" --set integrator.type=arkode --set integrator.cfl=4 --set integrator.viscous_coefficient=2
+expect 2 "integrator.cfl: expected a number in \[1e-06, 10\]" -- "$VESPH" check "$S" --set integrator.type=arkode --set integrator.cfl=11
+expect 2 "integrator.viscous_coefficient: expected a number in \[1e-06, 1\]" -- "$VESPH" check "$S" --set integrator.type=arkode-fixed --set integrator.viscous_coefficient=2
 expect 2 "poiseuille_newtonian.toml: domain: the periodic length along axis 0 .* must be at least 3 times the neighbour search radius" -- "$VESPH" check "$S" --set "domain.max=[2.0e-4, 1.125e-3]" --set "blocks[0].max=[2.0e-4, 1.0e-3]" --set "blocks[1].max=[2.0e-4, 0.0]" --set "blocks[2].max=[2.0e-4, 1.125e-3]"
 grep -v '^\[effects.equation_of_state\]\|^sound_speed' "$S" > "$WORK/noeos.toml"
 expect 2 "noeos.toml: effects.pressure_gradient needs the particle pressure.*add \[effects.equation_of_state\]" -- "$VESPH" check "$WORK/noeos.toml"
