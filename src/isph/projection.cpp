@@ -96,8 +96,7 @@ void Projection<D>::setup(Setup<D>& s) {
   };
   for (const Forbidden& f :
        {Forbidden{"equation_of_state", "ISPH takes the pressure from the Poisson equation, not from an equation of state"},
-        Forbidden{"continuity", "ISPH particles keep their density (the projection keeps the velocity divergence-free)"},
-        Forbidden{"artificial_viscosity", "the artificial viscosity of Fang et al. is built on the WCSPH sound speed"}})
+        Forbidden{"continuity", "ISPH particles keep their density (the projection keeps the velocity divergence-free)"}})
     if (s.find(f.effect))
       throw InputError(std::string("effects.") + f.effect + ": not with solver.scheme = \"isph\" (" + f.why +
                        "); remove it, or use scheme = \"wcsph\"");

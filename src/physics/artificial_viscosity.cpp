@@ -20,6 +20,7 @@
 // through the wall surface, so that a particle approaching the wall meets an approaching
 // image), the density the wall treatment gave them and their mass.
 #include <cmath>
+#include <optional>
 
 #include "vesph/physics/registry.hpp"
 
@@ -30,17 +31,27 @@ template <int D>
 class ArtificialViscosity final : public PairEffect<D, ArtificialViscosity<D>> {
  public:
   explicit ArtificialViscosity(ConfigTable& cfg)
-      : alpha_(cfg.number("alpha", 1.0, Bound::nonnegative)), beta_(cfg.number("beta", 2.0, Bound::nonnegative)) {}
+      : alpha_(cfg.number("alpha", 1.0, Bound::nonnegative)),
+        beta_(cfg.number("beta", 2.0, Bound::nonnegative)),
+        signal_speed_(cfg.optionalNumber("sound_speed", Bound::positive, "m/s")) {}
   std::string_view name() const override { return "artificial_viscosity"; }
   Phase phase() const override { return Phase::forces; }
 
   void setup(Setup<D>& s) override {
     // The pressure closure is set up in the state phase, before this force effect: its sound
     // speed is final here (also when chosen by the rule of thesis eq. 3.38).
-    if (!s.pressure_model)
-      throw InputError("effects.artificial_viscosity needs the sound speed of an equation of state, which "
-                       "nothing in this scene provides: add [effects.equation_of_state]");
-    c_ = s.pressure_model->soundSpeed();
+    if (signal_speed_) {
+      if (s.pressure_model)
+        throw InputError("effects.artificial_viscosity.sound_speed: only in scenes without an equation of state "
+                         "(the WCSPH sound speed is the equation of state's); remove the key");
+      c_ = *signal_speed_;
+    } else {
+      if (!s.pressure_model)
+        throw InputError("effects.artificial_viscosity needs the sound speed of an equation of state, which "
+                         "nothing in this scene provides: add [effects.equation_of_state], or (ISPH) give "
+                         "effects.artificial_viscosity.sound_speed");
+      c_ = s.pressure_model->soundSpeed();
+    }
     h_ = s.kernel.h;
     eta2_ = 0.01 * h_ * h_;
     wall_velocity_ = s.particles.fields.find("wall_velocity");
@@ -90,6 +101,7 @@ class ArtificialViscosity final : public PairEffect<D, ArtificialViscosity<D>> {
   }
 
   double alpha_, beta_;
+  std::optional<double> signal_speed_;
   double c_ = 0, h_ = 1, eta2_ = 0;
   const Field* wall_velocity_ = nullptr;
 };

@@ -91,6 +91,9 @@ $PY "$SRC/tools/check_output.py" "$WORK/fail" >"$WORK/fail.log" 2>&1 && pass || 
 # Scene errors.
 expect 2 "effects.equation_of_state: not with solver.scheme = \"isph\"" -- "$VESPH" check "$T" --set 'effects.equation_of_state.sound_speed=10.0'
 expect 2 "effects.continuity: not with solver.scheme = \"isph\"" -- "$VESPH" check "$T" --set 'effects.continuity={}'
+# the artificial viscosity takes its signal speed from the scene in ISPH (no equation of state)
+expect 2 "effects.artificial_viscosity needs the sound speed.*give effects.artificial_viscosity.sound_speed" -- "$VESPH" check "$T" --set 'effects.artificial_viscosity={}'
+expect 0 "sound_speed = 12.5" -- "$VESPH" check "$T" --set 'effects.artificial_viscosity.sound_speed=12.5'
 expect 2 "solver.linear_solver: expected no linear_solver with scheme = \"wcsph\"" -- "$VESPH" check "$SCENE" --set 'solver.linear_solver="klu"'
 expect 2 "solver.tolerance: expected no tolerance for the direct solver 'umfpack'" -- "$VESPH" check "$T" --set solver.tolerance=1e-8
 expect 2 "solver.linear_solver: expected one of: umfpack, klu, bicgstab" -- "$VESPH" check "$T" --set 'solver.linear_solver="cholmod"'

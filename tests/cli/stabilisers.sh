@@ -42,5 +42,8 @@ expect 2 "W\(dx\) = 0" -- "$VESPH" check "$S" --set 'effects.artificial_stress={
 # prerequisites: the sound speed and the pressure come from the equation of state
 grep -v '^\[effects.equation_of_state\]\|^sound_speed\|^\[effects.pressure_gradient\]' "$S" > "$WORK/noeos.toml"
 expect 2 "noeos.toml: effects.artificial_viscosity needs the sound speed.*add \[effects.equation_of_state\]" -- "$VESPH" check "$WORK/noeos.toml" --set 'effects.artificial_viscosity={}'
+# the ISPH signal speed is for scenes without an equation of state only
+expect 2 "effects.artificial_viscosity.sound_speed: only in scenes without an equation of state" -- "$VESPH" check "$S" --set 'effects.artificial_viscosity.sound_speed=12.5'
+expect 2 "effects.artificial_viscosity.sound_speed: expected a positive number \(m/s\)" -- "$VESPH" check "$WORK/noeos.toml" --set 'effects.artificial_viscosity.sound_speed=-1'
 expect 2 "noeos.toml: effects.artificial_stress needs the particle pressure.*add \[effects.equation_of_state\]" -- "$VESPH" check "$WORK/noeos.toml" --set 'effects.artificial_stress={}'
 finish
