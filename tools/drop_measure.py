@@ -33,6 +33,13 @@ Per frame (fluid particles, kind 0)
 - height: max y of the fluid - y_w (m and /D).
 - volume: sum m_i/rho_i (2D: area in m^2, 3D: m^3), its relative error against the first
   frame of the file and against the disk pi D^2/4 (3D: pi D^3/6).
+- interior density: the summation density rho~_i = sum_j m_j W(r_ij, h) (the scene's kernel
+  and h, fluid and wall particles) of the interior fluid particles, those whose kernel support
+  holds no open grid point (below: at least one support radius from the outside and from every
+  void, with a grid spacing to spare); interior_density_rel_err = their mean rho~ / the same mean in the first frame - 1.
+  It measures how much the particles have been compressed (> 0) or spread apart (< 0), and
+  -interior_density_rel_err is the volume error this implies. Unlike sum m/rho it means
+  something in ISPH, where rho stays rho0 by construction and sum m/rho cannot change.
 - clusters: fluid particles closer than --link dx (default 1.5) are linked (cKDTree pairs,
   connected components); a component of fewer than --min-cluster (default 2) particles is
   "detached" (splashed-off single particles); clusters = number of components of at least
@@ -110,6 +117,30 @@ def open_h5(path):
     return vesph_output.open_h5(path, allow_unlocked=True)
 
 
+# Kernel profiles f(q), support q_max and normalisation sigma_D (W = sigma/h^D f(r/h)), as in
+# include/vesph/core/kernel.hpp (thesis eqs. 3.3, 3.4; Wendland C2).
+def _cubic(q):
+    return np.where(q < 1.0, 2.0 / 3.0 - q * q + 0.5 * q ** 3,
+                    np.where(q < 2.0, (2.0 - np.minimum(q, 2.0)) ** 3 / 6.0, 0.0))
+
+
+def _quintic(q):
+    a, b, c = (np.maximum(3.0 - q, 0.0), np.maximum(2.0 - q, 0.0), np.maximum(1.0 - q, 0.0))
+    return a ** 5 - 6.0 * b ** 5 + 15.0 * c ** 5
+
+
+def _wendland_c2(q):
+    a = np.maximum(1.0 - 0.5 * q, 0.0)
+    return a ** 4 * (2.0 * q + 1.0)
+
+
+KERNELS = {  # name: (f, support q, {dim: sigma})
+    "cubic": (_cubic, 2.0, {2: 15.0 / (7.0 * math.pi), 3: 3.0 / (2.0 * math.pi)}),
+    "quintic": (_quintic, 3.0, {2: 7.0 / (478.0 * math.pi), 3: 1.0 / (120.0 * math.pi)}),
+    "wendland_c2": (_wendland_c2, 2.0, {2: 7.0 / (4.0 * math.pi), 3: 21.0 / (16.0 * math.pi)}),
+}
+
+
 class Drop:
     """The scene geometry and frame list of one vesph drop-impact output."""
 
@@ -130,6 +161,17 @@ class Drop:
         f, path = self.f, self.path
         self.scene, self.dim, self.dx = vesph_output.read_header(f, path)
         sc = self.scene
+        parts = sc.get("particles", {})
+        self.kernel = vesph_output.as_str(f.attrs["kernel"]) if "kernel" in f.attrs \
+            else str(parts.get("kernel", "quintic"))
+        if self.kernel not in KERNELS:
+            raise ToolError(f"{path}: unknown kernel {self.kernel!r} (expected one of "
+                            f"{', '.join(KERNELS)})")
+        try:
+            self.h = float(f.attrs["h"]) if "h" in f.attrs \
+                else float(parts.get("smoothing_ratio", 1.3)) * self.dx
+        except (TypeError, ValueError):
+            raise ToolError(f"{path}: the smoothing length h is not a number")
         self.name = str(sc.get("name", os.path.splitext(os.path.basename(path))[0]))
         blocks = sc.get("blocks", [])
         disks = [b for b in blocks if b.get("kind") == "fluid"
@@ -187,7 +229,8 @@ class Drop:
         self.f.close()
 
     def read(self, k):
-        """(positions [n, dim], mass [n], density [n]) of the fluid particles of frame k."""
+        """(positions [n, dim], mass [n], density [n]) of the fluid particles of frame k, and
+        (positions, masses) of all particles (fluid and walls) for the summation density."""
         nm = self.frames[k][0]
         g = self.f["frames"][nm]
         for ds in ("kind", "position", "mass", "density"):
@@ -204,7 +247,7 @@ class Drop:
         fl = kind == 0
         if not np.any(fl):
             raise ToolError(f"{self.path}: frame {nm} has no fluid particles (kind 0)")
-        return pos[fl], m[fl], rho[fl]
+        return pos[fl], m[fl], rho[fl], pos, m
 
 
 # -------------------------------------------------------------------------- measures
@@ -248,7 +291,8 @@ def open_radius(dim, link):
 
 def grid_measures(pos, dx, link, crack_radius):
     """Void and crack measures on a grid (see the module docstring): dict with void_gap [m],
-    void_area and crack_area [m^2, 3D: m^3] and the grid spacing [m]."""
+    void_area and crack_area [m^2, 3D: m^3], the grid spacing [m] and, per particle, the
+    distance [m] from its grid point to the nearest open point (outside or void)."""
     from scipy import ndimage
     from scipy.spatial import cKDTree
 
@@ -286,8 +330,30 @@ def grid_measures(pos, dx, link, crack_radius):
     dilated = ndimage.distance_transform_edt(outside, sampling=s) <= R
     closed = ndimage.distance_transform_edt(dilated, sampling=s) > R
     crack = int(np.count_nonzero(closed & outside))
+    to_open = ndimage.distance_transform_edt(~open_, sampling=s)
+    cell = np.clip(np.rint((pos - lo) / s).astype(int), 0, np.array(shape) - 1)
     return {"void_gap": 2.0 * float(inner.max()) if inner.size else 0.0,
-            "void_area": enclosed * s ** dim, "crack_area": crack * s ** dim, "grid": s}
+            "void_area": enclosed * s ** dim, "crack_area": crack * s ** dim, "grid": s,
+            "particle_to_open": to_open[tuple(cell.T)]}
+
+
+def interior_density(drop, pos, pos_all, m_all, to_open, grid):
+    """Mean summation density [kg/m^3] of the fluid particles whose kernel support holds no
+    open grid point, and their count. to_open is sampled at the particle's nearest grid point
+    (up to a grid spacing off): a particle counts when to_open >= the support radius + grid."""
+    from scipy.spatial import cKDTree
+
+    f, q_max, sigma = KERNELS[drop.kernel]
+    radius = q_max * drop.h
+    inner = np.flatnonzero(to_open >= radius + grid)
+    if inner.size == 0:
+        return float("nan"), 0
+    pairs = cKDTree(pos[inner]).sparse_distance_matrix(cKDTree(pos_all), radius,
+                                                        output_type="coo_matrix")
+    w = sigma[drop.dim] / drop.h ** drop.dim * f(pairs.data / drop.h)
+    # the pairs include each particle with itself (distance 0)
+    rho = np.bincount(pairs.row, weights=w * m_all[pairs.col], minlength=inner.size)
+    return float(np.mean(rho)), int(inner.size)
 
 
 def _read(drop, k):
@@ -321,7 +387,7 @@ def measure(drop, a):
         got = first if k == 0 else _read(drop, k)
         if got is None:
             break
-        pos, m, rho = got
+        pos, m, rho, pos_all, m_all = got
         vol = float(np.sum(m / rho))
         x, y = pos[:, 0], pos[:, 1]
         h = y - drop.wall_y
@@ -334,6 +400,9 @@ def measure(drop, a):
         nn = max_nn_gap(pos) / dx
         gm = grid_measures(pos, dx, a.link, a.crack_radius)
         vg = gm["void_gap"] / dx
+        rho_in, n_in = interior_density(drop, pos, pos_all, m_all, gm["particle_to_open"], gm["grid"])
+        if k == 0:
+            drop.rho_interior_first = rho_in
         cf = gm["crack_area"] / vol_first
         width = float(x.max() - x.min())
         height = float(y.max() - drop.wall_y)
@@ -347,6 +416,8 @@ def measure(drop, a):
             "height_m": height, "height_D": height / D,
             "volume": vol, "volume_rel_err_first": vol / vol_first - 1.0,
             "volume_rel_err_disk": vol / drop.area0 - 1.0,
+            "interior_density_rel_err": rho_in / drop.rho_interior_first - 1.0,
+            "n_interior": n_in,
             "n_fluid": len(x), "clusters": ncl, "fragments": nfrag, "detached": ndet,
             "largest_cluster_fraction": big / len(x),
             "max_nn_gap_dx": nn, "void_gap_dx": vg,
@@ -369,6 +440,7 @@ COLUMNS = [  # (key, csv header; {vol} is replaced by volume_m2 / volume_m3)
     ("max_nn_gap_dx", "max_nn_gap_over_dx"), ("void_gap_dx", "void_gap_over_dx"),
     ("void_fraction", "void_fraction"), ("crack_fraction", "crack_fraction"),
     ("fractured", "fractured"),
+    ("interior_density_rel_err", "interior_density_rel_err"), ("n_interior", "n_interior"),
 ]
 
 
@@ -400,6 +472,8 @@ def plot(png, runs, a, title):
         axs[1].plot(t, col("height_D"), "-", color=c, label=label)
         axs[2].plot(t, [100 * v for v in col("volume_rel_err_first")], "-", color=c,
                     label=f"{label}: vs first frame")
+        axs[2].plot(t, [-100 * v for v in col("interior_density_rel_err")], "--", color=c,
+                    label=f"{label}: from the interior summation density")
         axs[2].plot(t, [100 * v for v in col("volume_rel_err_disk")], ":", color=c,
                     label=f"{label}: vs " + ("pi D^2/4" if a.dim == 2 else "pi D^3/6"))
         axs[3].plot(t, col("clusters"), "o-", ms=3, color=c, label=f"{label}: clusters")
@@ -475,6 +549,11 @@ def summarize(drop, rows, a, p):
     ve = max(abs(r["volume_rel_err_first"]) for r in rows)
     vd = max(abs(r["volume_rel_err_disk"]) for r in rows)
     p(f"   max |volume error|: {100 * ve:.4g} % vs the first frame, {100 * vd:.4g} % vs the disk")
+    di = [r["interior_density_rel_err"] for r in rows if r["n_interior"] > 0]
+    if di:
+        p(f"   interior summation density vs the first frame: {100 * min(di):+.3g} % ... "
+          f"{100 * max(di):+.3g} % (mean over the {rows[-1]['n_interior']} interior particles "
+          "of the last frame; the volume error this implies has the opposite sign)")
     frac = [r for r in rows if r["fractured"]]
     p(f"   max clusters {max(r['clusters'] for r in rows)}, max detached "
       f"{max(r['detached'] for r in rows)}, min largest cluster "

@@ -1355,6 +1355,24 @@ def make_drop_tests(tmp):
                f"stranded frame {r1}")
 
     @t
+    def drop_interior_summation_density_sees_compression():
+        # the disk squeezed uniformly to 0.99 of its size about its centre, the densities in the
+        # file unchanged (as in ISPH): sum m/rho sees nothing, the interior summation density
+        # sees the area shrink by 0.99^2 (+2.03 %)
+        c = np.array([0.0, 0.015])
+        h5 = write_drop(os.path.join(d, "squeezed.h5"), [(0.0, disk), (0.002, c + 0.99 * (disk - c))])
+        rc, out, err, rows = measure(h5)
+        r0, r1 = rows
+        expect(rc == 0 and float(r1["volume_rel_err_first"]) == 0.0, f"sum m/rho {r1}", out + err)
+        # full support (3 dx) inside a disk of radius 10 dx: the particles more than about
+        # 2.25 dx inside the outer row (the open region begins 0.75 dx beyond it), radius ~7.5 dx
+        expect(0.4 * N < int(r0["n_interior"]) < 0.7 * N, f"interior particles {r0['n_interior']} of {N}")
+        expect(float(r0["interior_density_rel_err"]) == 0.0, "first frame")
+        e = float(r1["interior_density_rel_err"])
+        expect(abs(e - (1 / 0.99 ** 2 - 1)) < 2e-3, f"interior density error {e}, expected 0.0203")
+        expect("interior summation density vs the first frame" in out, "summary line", out)
+
+    @t
     def drop_split_disk_two_clusters():
         half = disk[np.abs(K[:, 0]) > 1]            # columns -1, 0, 1 removed: gap 4 dx
         h5 = write_drop(os.path.join(d, "split.h5"), [(0.0, disk), (0.01, half)])

@@ -3,7 +3,15 @@
 # particles) to t V/D = 4 (through the impact, the fastest spreading and the retraction):
 #   epsilon = 0   (no artificial stress) fractures: tools/drop_measure.py --expect-fracture
 #   epsilon = 0.5 (Fang's value)         stays intact: --no-fracture, volume error <= 1 %
-# The full-resolution runs to t V/D = 8 are in docs/validation.md §10 (too long for CI).
+# and the same drop with incompressible SPH (cases/drop_oldroyd_b_isph.toml, issue 6), whose
+# artificial viscosity takes Fang's c as its signal speed:
+#   ISPH stays in one piece (one fragment; fragments, not the void gap: its largest enclosed
+#   void reaches 2.76 dx at t V/D 2.75, over the 2.5 dx of --no-fracture), keeps its interior
+#   summation density within 1 % (its sum m/rho is constant by construction), spreads and
+#   retracts with the WCSPH drop: width/D within 0.1 of the WCSPH run at t V/D = 2 ... 4
+#   (measured 0.06 at most) and a retraction of at least 0.15 D after the widest frame
+#   (measured 0.30).
+# The full-resolution runs to t V/D = 8 are in docs/validation.md §10, §11 (too long for CI).
 . "$(dirname "$0")/lib.sh"
 CASE=$SRC/cases/drop_oldroyd_b.toml
 HALF="--set particles.spacing=4e-4 --set domain.min=[-0.06,-0.0012] --set blocks[1].min=[-0.05,-0.0012] --set time.end=0.08 --set output.interval=0.005"
@@ -12,7 +20,10 @@ for eps in 0 0.5; do
   OMP_NUM_THREADS=1 "$VESPH" run "$CASE" -o "$WORK/e$eps" --quiet $HALF --set effects.artificial_stress.epsilon=$eps \
     >"$WORK/e$eps.log" 2>&1 &
 done
+# shellcheck disable=SC2086
+OMP_NUM_THREADS=1 "$VESPH" run "$SRC/cases/drop_oldroyd_b_isph.toml" -o "$WORK/isph" --quiet $HALF >"$WORK/isph.log" 2>&1 &
 wait
+grep -q '"status": "ok"' "$WORK/isph/summary.json" 2>/dev/null && pass || fail "ISPH: the run did not finish: $(tail -3 "$WORK/isph.log")"
 for eps in 0 0.5; do
   grep -q '"status": "ok"' "$WORK/e$eps/summary.json" 2>/dev/null && pass || fail "epsilon = $eps: the run did not finish: $(tail -3 "$WORK/e$eps.log")"
 done
@@ -20,4 +31,22 @@ $PY "$SRC/tools/drop_measure.py" "$WORK/e0/drop_oldroyd_b.h5" --no-png --expect-
   fail "epsilon = 0 did not fracture: $(tail -4 "$WORK/m0.log")"
 $PY "$SRC/tools/drop_measure.py" "$WORK/e0.5/drop_oldroyd_b.h5" --no-png --no-fracture --max-volume-error 0.01 >"$WORK/m5.log" 2>&1 && pass ||
   fail "epsilon = 0.5 fractured or lost volume: $(tail -4 "$WORK/m5.log")"
+$PY "$SRC/tools/drop_measure.py" "$WORK/isph/drop_oldroyd_b_isph.h5" --no-png >"$WORK/mi.log" 2>&1 && pass ||
+  fail "ISPH: drop_measure failed: $(tail -4 "$WORK/mi.log")"
+$PY - "$WORK/e0.5/drop_oldroyd_b_drop.csv" "$WORK/isph/drop_oldroyd_b_isph_drop.csv" >"$WORK/isph_compare.log" 2>&1 <<'PYEOF' && pass ||
+import csv, sys
+rows = [list(csv.DictReader(open(p))) for p in sys.argv[1:3]]
+wc, isph = ({round(float(r["tV_over_D"]), 3): r for r in rs} for rs in rows)
+assert all(r["fragments"] == "1" for r in isph.values()), "ISPH drop in pieces: " + str([(t, r["fragments"]) for t, r in isph.items() if r["fragments"] != "1"])
+err = max(abs(float(r["interior_density_rel_err"])) for r in isph.values())
+assert err <= 0.01, f"ISPH interior summation density off by {100 * err:.2f} %"
+worst = max(abs(float(isph[t]["width_over_D"]) - float(wc[t]["width_over_D"])) for t in (2.0, 2.5, 3.0, 3.5, 4.0))
+widths = [float(r["width_over_D"]) for r in isph.values()]
+retraction = max(widths) - widths[-1]
+print(f"ISPH vs WCSPH width/D: max difference {worst:.3f}; ISPH retraction {retraction:.3f} D; density {100 * err:.2f} %")
+assert worst <= 0.1, f"ISPH width/D differs from WCSPH by {worst:.3f} (limit 0.1)"
+assert retraction >= 0.15, f"ISPH drop retracts by {retraction:.3f} D only (at least 0.15)"
+PYEOF
+  fail "ISPH against WCSPH: $(tail -3 "$WORK/isph_compare.log")"
+cat "$WORK/isph_compare.log"
 finish
