@@ -89,7 +89,9 @@ to the scene name. With several files
 each gets its CSV (<label>_drop.csv) and one PNG overlays all runs, <prefix>_drop.png
 with prefix defaulting to "compare". The label is the scene name; a name shared by several
 runs gets the file's directory name appended (name_dir), and then _2, _3, ... if needed.
-A summary table is printed for every run.
+A summary table is printed for every run. --pictures T1,T2,... also writes
+<prefix>_frames.png: the fluid particles of the frames nearest to those t V/D (a row per
+time, a column per run; x / D from the drop's centre line, y / D above the wall).
 
 Exit status: 0 when all requested checks pass; 1 when a check fails or a file cannot be used
 (missing, not HDF5, not a vesph output, no disk fluid block, no frames); 2 for usage errors.
@@ -380,6 +382,10 @@ def measure(drop, a):
     vol_first = float(np.sum(first[1] / first[2]))
     drop.vol_first, drop.t_first = vol_first, drop.frames[0][1]
     rows = []
+    # --pictures: the frame nearest to each requested t V/D (one picture per time)
+    times = np.array([t * V / D for _, t in drop.frames])
+    picture_frames = {int(np.argmin(np.abs(times - want))) for want in (a.pictures or [])}
+    drop.pictures = {}
     for k, (nm, t) in enumerate(drop.frames):
         tvd = t * V / D
         if a.until is not None and tvd > a.until + 1e-9 * max(1.0, abs(a.until)):
@@ -388,6 +394,8 @@ def measure(drop, a):
         if got is None:
             break
         pos, m, rho, pos_all, m_all = got
+        if k in picture_frames:
+            drop.pictures[k] = (tvd, pos.copy())
         vol = float(np.sum(m / rho))
         x, y = pos[:, 0], pos[:, 1]
         h = y - drop.wall_y
@@ -510,6 +518,47 @@ def plot(png, runs, a, title):
 
 
 # ------------------------------------------------------------------------------ report
+def plot_pictures(png, runs, a):
+    """Particle pictures: one row per requested t V/D, one column per run; coordinates in D
+    from the disk's centre line (x) and the wall (y)."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    shown = [(lab, d, sorted(d.pictures.values(), key=lambda v: v[0])) for lab, d in runs]
+    nrow = max(len(p) for _, _, p in shown)
+    xs = [(pos[:, 0] - d.centre[0]) / d.D for _, d, p in shown for _, pos in p]
+    ys = [(pos[:, 1] - d.wall_y) / d.D for _, d, p in shown for _, pos in p]
+    xmax = max(float(np.max(np.abs(x))) for x in xs) + 0.05
+    ymax = max(float(np.max(y)) for y in ys) + 0.05
+    width = 2 * xmax
+    col_w = min(7.0, 1.6 * width)
+    row_h = max(0.9, col_w * (ymax + 0.1) / width + 0.4)
+    fig, axs = plt.subplots(nrow, len(shown), figsize=(col_w * len(shown), row_h * nrow),
+                            squeeze=False)
+    for c, (lab, d, pics) in enumerate(shown):
+        # marker area about one particle at the figure's scale (points^2)
+        size = max(0.2, (72.0 * col_w * d.dx / (d.D * width)) ** 2 * 0.6)
+        for r in range(nrow):
+            ax = axs[r][c]
+            if r >= len(pics):
+                ax.axis("off")
+                continue
+            tvd, pos = pics[r]
+            ax.scatter((pos[:, 0] - d.centre[0]) / d.D, (pos[:, 1] - d.wall_y) / d.D, s=size,
+                       c="tab:blue", linewidths=0)
+            ax.axhline(0.0, color="0.4", lw=0.8)
+            ax.set_xlim(-xmax, xmax)
+            ax.set_ylim(-0.05, ymax)
+            ax.set_aspect("equal")
+            ax.set_title(f"{lab}, t V/D = {tvd:.3g}", fontsize=9)
+            ax.tick_params(labelsize=7)
+    fig.supxlabel("x / D from the drop's centre line; y / D above the wall", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(png, dpi=110)
+    plt.close(fig)
+
+
 def summarize(drop, rows, a, p):
     p(f"== {drop.name}: {drop.path}")
     for n in drop.notes:
@@ -678,11 +727,29 @@ def run(a, out=sys.stdout):
                  + f"  (link {a.link:g} dx, contact {a.contact:g} dx)")
         plot(png, [(lab, rows) for (_, rows), lab in zip(results, labels)], a, title)
         written.append(png)
+    if a.pictures:
+        d0 = results[0][0]
+        od = a.out_dir if a.out_dir is not None else os.path.dirname(os.path.abspath(d0.path))
+        pre = (a.prefix or labels[0]) if single else (a.prefix or "compare")
+        png = os.path.join(od, pre + "_frames.png")
+        plot_pictures(png, [(lab, d) for (d, _), lab in zip(results, labels)], a)
+        written.append(png)
     for w in written:
         p(f"wrote {w}")
     if a.max_volume_error is not None or a.no_fracture or a.expect_fracture:
         p("RESULT: " + ("PASS" if all_ok else "FAIL"))
     return 0 if all_ok else 1
+
+
+def picture_times(text):
+    """--pictures: comma-separated t V/D values >= 0."""
+    try:
+        vals = [float(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected numbers t V/D separated by commas, got {text!r}")
+    if not vals or any(not (v >= 0) for v in vals):
+        raise argparse.ArgumentTypeError(f"expected t V/D values >= 0, got {text!r}")
+    return vals
 
 
 def main(argv=None):
@@ -700,6 +767,9 @@ def main(argv=None):
                     help="file name prefix (default: the scene name; 'compare' for the PNG "
                          "of several runs)")
     ap.add_argument("--no-png", action="store_true", help="write the CSV only")
+    ap.add_argument("--pictures", metavar="T1,T2,...", type=picture_times,
+                    help="also write PREFIX_frames.png: the fluid particles of the frames "
+                         "nearest to these t V/D, one row per time, one column per run")
     ap.add_argument("--link", type=float, default=1.5, metavar="L",
                     help="particles closer than L dx are linked into a cluster (default 1.5)")
     ap.add_argument("--min-cluster", type=int, default=2, metavar="N",

@@ -1373,6 +1373,17 @@ def make_drop_tests(tmp):
         expect("interior summation density vs the first frame" in out, "summary line", out)
 
     @t
+    def drop_pictures_of_chosen_frames():
+        h5 = write_drop(os.path.join(d, "pics.h5"), [(0.0, disk), (0.003, disk - [0.0, 0.003])])
+        png = os.path.join(d, "pics_frames.png")
+        rc, out, err, rows = measure(h5, "--pictures", "0,0.14")
+        expect(rc == 0 and os.path.getsize(png) > 0 and png in out, f"exit {rc}", out + err)
+        rc, out, err = tool("drop_measure.py", h5, "--no-png", "--pictures", "soon")
+        expect(rc == 2 and "--pictures" in err and "numbers" in err, f"--pictures soon: exit {rc}", err)
+        rc, out, err = tool("drop_measure.py", h5, "--no-png", "--pictures", "-1")
+        expect(rc == 2 and ">= 0" in err, f"--pictures -1: exit {rc}", err)
+
+    @t
     def drop_split_disk_two_clusters():
         half = disk[np.abs(K[:, 0]) > 1]            # columns -1, 0, 1 removed: gap 4 dx
         h5 = write_drop(os.path.join(d, "split.h5"), [(0.0, disk), (0.01, half)])
