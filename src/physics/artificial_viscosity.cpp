@@ -15,7 +15,10 @@
 // is the one written above: an extra pressure between approaching particles.
 //
 // c is the sound speed of the scene's pressure closure (PressureModel::soundSpeed, uniform in
-// WCSPH, so c_ij = c). Wall neighbours enter with the wall's extrapolated no-slip velocity
+// WCSPH, so c_ij = c). ISPH has no sound speed: there c is the key sound_speed, a numerical
+// signal speed that only sets the dissipation nu = alpha c h / (2 (D + 2)) (the ISPH drop
+// takes Fang's 12.5 m/s, so that it carries the WCSPH drop's dissipation; without the alpha
+// term it fractured, as Fang §4.1 found for the viscoelastic drop). Wall neighbours enter with the wall's extrapolated no-slip velocity
 // (field "wall_velocity", as in the viscous term: the mirror image of the fluid velocity
 // through the wall surface, so that a particle approaching the wall meets an approaching
 // image), the density the wall treatment gave them and their mass.
