@@ -171,7 +171,7 @@ class Drop:
                             f"{', '.join(KERNELS)})")
         try:
             self.h = float(f.attrs["h"]) if "h" in f.attrs \
-                else float(parts.get("smoothing_ratio", 1.3)) * self.dx
+                else float(parts.get("smoothing_ratio", 1.6)) * self.dx
         except (TypeError, ValueError):
             raise ToolError(f"{path}: the smoothing length h is not a number")
         self.name = str(sc.get("name", os.path.splitext(os.path.basename(path))[0]))
