@@ -156,7 +156,8 @@ Simulation<D>::Simulation(Config& config, const SceneHeader& header) : config_(c
 
   // The integrator, with the scales for default tolerances: the sound-speed rule's design
   // velocity and density variation when the scene used it; else Mach 0.1 of the given sound
-  // speed and delta = 0.01.
+  // speed and delta = 0.01; without a pressure model (ISPH) the inflow's peak speed or the
+  // fastest initial fluid speed.
   // The stress scale of evolving models uses the rule's length, else 40 dx.
   ReferenceScales scales{dx_, rho0_, 0.01, 0.0};
   double length = 40 * dx_;
@@ -166,6 +167,12 @@ Simulation<D>::Simulation(Config& config, const SceneHeader& header) : config_(c
     if (m->designLength() > 0) length = m->designLength();
   }
   if (!(scales.velocity > 0)) scales.velocity = inflow_speed;
+  if (!(scales.velocity > 0)) {
+    // Else the fastest initial fluid speed (a drop's impact velocity); 0 for a fluid at rest,
+    // and arkode then asks for reference_velocity.
+    const ParticleSet<D>& p = system_.particles;
+    for (std::size_t i = 0; i < p.n_moving; ++i) scales.velocity = std::max(scales.velocity, p.v(i).norm());
+  }
   for (const auto& e : system_.effects) scales.stress = std::max(scales.stress, e->stressScale(scales.velocity, length));
   ConfigTable integ = root.table("integrator");
   integrator_ = makeIntegrator(integ, scales, scheme_ == "isph" ? 0.175 : 0.125);

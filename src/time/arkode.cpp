@@ -286,7 +286,7 @@ std::unique_ptr<Integrator> makeArkode(ConfigTable& cfg, const StepControl& c, c
   const double vref = cfg.optionalNumber("reference_velocity", Bound::positive, "m/s").value_or(s.velocity);
   if (!(vref > 0) && !cfg.has("atol_velocity"))
     cfg.fail("reference_velocity", "the expected flow speed in m/s (for the default velocity tolerance atol_velocity = rtol * reference_velocity); "
-                                   "no sound-speed rule gives one in this scene");
+                                   "no sound-speed rule, inflow or initial fluid velocity gives one in this scene");
   const double atol_x = cfg.number("atol_position", rtol * s.spacing, Bound::positive, "m");
   const double atol_rho = cfg.number("atol_density", rtol * s.density * s.density_variation, Bound::positive, "kg/m^3");
   const double atol_v = cfg.number("atol_velocity", rtol * vref, Bound::positive, "m/s");

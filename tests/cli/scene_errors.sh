@@ -14,6 +14,10 @@ expect 2 "integrator.cfl: expected a number in \[1e-06, 1\]" -- "$VESPH" check "
 # the adaptive arkode takes the limits as caps above its error-controlled step: up to 10
 expect 0 "cfl = 4" -- "$VESPH" check "$S" --set integrator.type=arkode --set integrator.cfl=4 --set integrator.viscous_coefficient=2
 expect 2 "integrator.cfl: expected a number in \[1e-06, 10\]" -- "$VESPH" check "$S" --set integrator.type=arkode --set integrator.cfl=11
+# ISPH has no sound-speed rule: arkode's velocity scale is the fastest initial fluid speed (the
+# drop's 1 m/s), and a fluid at rest (the tank) must give reference_velocity
+expect 0 "type = 'arkode'" -- "$VESPH" check "$SRC/cases/drop_newtonian_isph.toml" --set integrator.type=arkode
+expect 2 "integrator.reference_velocity: expected the expected flow speed.*no sound-speed rule, inflow or initial fluid velocity gives one" -- "$VESPH" check "$SRC/cases/hydrostatic_tank_isph.toml" --set integrator.type=arkode
 expect 2 "integrator.viscous_coefficient: expected a number in \[1e-06, 1\]" -- "$VESPH" check "$S" --set integrator.type=arkode-fixed --set integrator.viscous_coefficient=2
 expect 2 "poiseuille_newtonian.toml: domain: the periodic length along axis 0 .* must be at least 3 times the neighbour search radius" -- "$VESPH" check "$S" --set "domain.max=[2.0e-4, 1.125e-3]" --set "blocks[0].max=[2.0e-4, 1.0e-3]" --set "blocks[1].max=[2.0e-4, 0.0]" --set "blocks[2].max=[2.0e-4, 1.125e-3]"
 grep -v '^\[effects.equation_of_state\]\|^sound_speed' "$S" > "$WORK/noeos.toml"
