@@ -23,23 +23,8 @@ for c in newtonian newtonian_isph; do
   $PY "$SRC/tools/drop_measure.py" "$WORK/$c/drop_$c.h5" --no-png >"$WORK/m_$c.log" 2>&1 && pass ||
     fail "$c: drop_measure failed: $(tail -4 "$WORK/m_$c.log")"
 done
-$PY - "$WORK/newtonian/drop_newtonian_drop.csv" "$WORK/newtonian_isph/drop_newtonian_isph_drop.csv" >"$WORK/compare.log" 2>&1 <<'PYEOF' && pass ||
-import csv, sys
-rows = [list(csv.DictReader(open(p))) for p in sys.argv[1:3]]
-wc, isph = ({round(float(r["tV_over_D"]), 3): r for r in rs} for rs in rows)
-assert all(r["fragments"] == "1" for r in isph.values()), "ISPH drop in pieces: " + str([(t, r["fragments"]) for t, r in isph.items() if r["fragments"] != "1"])
-err = max(abs(float(r["interior_density_rel_err"])) for r in isph.values())
-assert err <= 0.01, f"ISPH interior summation density off by {100 * err:.2f} %"
-worst = max(abs(float(isph[t]["width_over_D"]) - float(wc[t]["width_over_D"])) for t in (2.0, 2.5, 3.0))
-widest, setback = 0.0, 0.0
-for t in sorted(isph):
-    w = float(isph[t]["width_over_D"])
-    setback = max(setback, widest - w)
-    widest = max(widest, w)
-print(f"ISPH vs WCSPH width/D: max difference {worst:.3f}; largest setback {setback:.3f} D; density {100 * err:.2f} %")
-assert worst <= 0.1, f"ISPH width/D differs from WCSPH by {worst:.3f} (limit 0.1)"
-assert setback <= 0.01, f"the Newtonian ISPH drop retracts by {setback:.3f} D (limit 0.01)"
-PYEOF
+$PY "$SRC/tests/cli/drop_compare.py" "$WORK/newtonian/drop_newtonian_drop.csv" "$WORK/newtonian_isph/drop_newtonian_isph_drop.csv" \
+  --times 2,2.5,3 --max-width-diff 0.1 --max-setback 0.01 >"$WORK/compare.log" 2>&1 && pass ||
   fail "ISPH against WCSPH: $(tail -3 "$WORK/compare.log")"
 cat "$WORK/compare.log"
 finish

@@ -33,20 +33,8 @@ $PY "$SRC/tools/drop_measure.py" "$WORK/e0.5/drop_oldroyd_b.h5" --no-png --no-fr
   fail "epsilon = 0.5 fractured or lost volume: $(tail -4 "$WORK/m5.log")"
 $PY "$SRC/tools/drop_measure.py" "$WORK/isph/drop_oldroyd_b_isph.h5" --no-png >"$WORK/mi.log" 2>&1 && pass ||
   fail "ISPH: drop_measure failed: $(tail -4 "$WORK/mi.log")"
-$PY - "$WORK/e0.5/drop_oldroyd_b_drop.csv" "$WORK/isph/drop_oldroyd_b_isph_drop.csv" >"$WORK/isph_compare.log" 2>&1 <<'PYEOF' && pass ||
-import csv, sys
-rows = [list(csv.DictReader(open(p))) for p in sys.argv[1:3]]
-wc, isph = ({round(float(r["tV_over_D"]), 3): r for r in rs} for rs in rows)
-assert all(r["fragments"] == "1" for r in isph.values()), "ISPH drop in pieces: " + str([(t, r["fragments"]) for t, r in isph.items() if r["fragments"] != "1"])
-err = max(abs(float(r["interior_density_rel_err"])) for r in isph.values())
-assert err <= 0.01, f"ISPH interior summation density off by {100 * err:.2f} %"
-worst = max(abs(float(isph[t]["width_over_D"]) - float(wc[t]["width_over_D"])) for t in (2.0, 2.5, 3.0, 3.5, 4.0))
-widths = [float(r["width_over_D"]) for r in isph.values()]
-retraction = max(widths) - widths[-1]
-print(f"ISPH vs WCSPH width/D: max difference {worst:.3f}; ISPH retraction {retraction:.3f} D; density {100 * err:.2f} %")
-assert worst <= 0.1, f"ISPH width/D differs from WCSPH by {worst:.3f} (limit 0.1)"
-assert retraction >= 0.15, f"ISPH drop retracts by {retraction:.3f} D only (at least 0.15)"
-PYEOF
+$PY "$SRC/tests/cli/drop_compare.py" "$WORK/e0.5/drop_oldroyd_b_drop.csv" "$WORK/isph/drop_oldroyd_b_isph_drop.csv" \
+  --times 2,2.5,3,3.5,4 --max-width-diff 0.1 --min-retraction 0.15 >"$WORK/isph_compare.log" 2>&1 && pass ||
   fail "ISPH against WCSPH: $(tail -3 "$WORK/isph_compare.log")"
 cat "$WORK/isph_compare.log"
 finish
