@@ -180,8 +180,18 @@ Simulation<D>::Simulation(Config& config, const SceneHeader& header) : config_(c
 
   ConfigTable checks = root.table("checks");
   max_density_deviation_ = checks.numberIn("max_density_deviation", 0.5, 1e-6, 10.0, "relative");
-  const double c = system_.pressureModel() ? system_.pressureModel()->soundSpeed() : 0.0;
-  max_speed_ = checks.number("max_speed", c > 0 ? c : 1e30, Bound::positive, "m/s");
+  // The default guard: the sound speed (WCSPH). Without one (ISPH), 1000 times the flow's
+  // speed scale, the reference speed above or the free-fall speed sqrt(|g| L) over the domain's
+  // largest extent L: a run that has blown up stops there, before the step size has collapsed
+  // and the last good state is itself far from any flow; 1e30 when the scene gives no scale.
+  double guard = system_.pressureModel() ? system_.pressureModel()->soundSpeed() : 0.0;
+  if (!(guard > 0)) {
+    double extent = 0;
+    for (int a = 0; a < D; ++a) extent = std::max(extent, system_.domain.length(a));
+    const double speed = std::max(scales.velocity, std::sqrt(system_.bodyAcceleration().norm() * extent));
+    guard = speed > 0 ? 1e3 * speed : 1e30;
+  }
+  max_speed_ = checks.number("max_speed", guard, Bound::positive, "m/s");
 
   config.rejectUnknownKeys();
   resolved_scene_ = config.resolvedToml();
@@ -458,7 +468,7 @@ std::string Simulation<D>::checkState(const DiagnosticsRow& row, const double* y
   }
   if (row.max_speed > max_speed_) {
     os << "a particle moves at " << row.max_speed << " m/s, faster than checks.max_speed = " << max_speed_
-       << " m/s (for WCSPH the sound speed) at t = " << row.time << " s";
+       << " m/s (by default the sound speed; for ISPH 1000 times the flow speed scale) at t = " << row.time << " s";
     return os.str();
   }
   for (std::size_t i = 0; i < n && !leave_domain_remove_; ++i)
