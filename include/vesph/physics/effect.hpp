@@ -184,6 +184,14 @@ class Effect {
   virtual bool prepares() const { return false; }
   virtual void prepare(const RhsContext<D>& ctx, std::size_t begin, std::size_t end) const {}
 
+  // A pair effect whose result for particle i depends on its neighbours' results of the same
+  // pass (the free-surface band: near an outermost particle) asks for a second sweep:
+  // PairDriver::run then calls interactAgain for every moving particle after the pass, once
+  // every interact has finished. A pass without such an effect runs no second sweep.
+  virtual bool secondSweep() const { return false; }
+  virtual void interactAgain(const RhsContext<D>& ctx, Index i, std::span<const Neighbour<D>> moving,
+                             std::span<const Neighbour<D>> fixed) const {}
+
   // Per-particle effects: moving particles [begin, end).
   virtual void particles(const RhsContext<D>& ctx, std::size_t begin, std::size_t end) const {}
   // Pair effects: particle i with its moving and fixed neighbours (within the support).

@@ -28,7 +28,8 @@ class PairDriver {
 
   // One pair pass over the moving particles with the given pair effects. Effects that
   // prepare per-particle values (Effect::prepares) get their prepare() over all particles
-  // first; without one the pass runs no extra code.
+  // first, effects that ask for a second sweep (Effect::secondSweep) their interactAgain()
+  // after; without either the pass runs no extra code.
   void run(const RhsContext<D>& ctx, const NeighbourList<D>& list,
            std::span<Effect<D>* const> effects) {
     if (effects.empty()) return;
@@ -41,6 +42,18 @@ class PairDriver {
     pairs_ += forEachMoving(ctx.particles, ctx.kernel, ctx.domain, list, need_w,
                             [&](Index i, std::span<const Neighbour<D>> moving, std::span<const Neighbour<D>> fixed) {
                               for (Effect<D>* e : effects) e->interact(ctx, i, moving, fixed);
+                            });
+    bool need_again = false, need_w_again = false;
+    for (Effect<D>* e : effects)
+      if (e->secondSweep()) {
+        need_again = true;
+        need_w_again = need_w_again || e->needsKernelValue();
+      }
+    if (!need_again) return;
+    pairs_ += forEachMoving(ctx.particles, ctx.kernel, ctx.domain, list, need_w_again,
+                            [&](Index i, std::span<const Neighbour<D>> moving, std::span<const Neighbour<D>> fixed) {
+                              for (Effect<D>* e : effects)
+                                if (e->secondSweep()) e->interactAgain(ctx, i, moving, fixed);
                             });
   }
 
