@@ -105,19 +105,25 @@ class FreeSurface final : public Effect<D> {
     for (const Neighbour<D>& nb : fixed) n += nb.W;
     density_->data[i] = n;
     const double flag = (marrone_ ? marroneSurface(ctx, moving, fixed) : n <= limit_) ? 1.0 : 0.0;
-    (near_surface_ ? outermost_ : flag_)->data[i] = flag;
+    flag_->data[i] = flag;
+    // The second sweep decides only the particles that are not outermost and not too dense.
+    if (near_surface_) outermost_->data[i] = flag;
   }
 
   // With method = "marrone" and a threshold: a particle whose number density is at most
   // threshold n_ref is flagged too when an outermost particle (the first sweep's Marrone
   // flag) lies within its support.
+  // Particles that are outermost, or too dense to be flagged, keep the first sweep's flag;
+  // the second sweep gathers the neighbours of the rest only.
   bool secondSweep() const override { return near_surface_; }
+  bool sweepAgain(const RhsContext<D>&, Index i) const override {
+    return outermost_->data[i] < 0.5 && density_->data[i] <= limit_;
+  }
   void interactAgain(const RhsContext<D>&, Index i, std::span<const Neighbour<D>> moving,
                      std::span<const Neighbour<D>>) const override {
     const double* outer = outermost_->data.data();
-    bool flag = outer[i] > 0.5;
-    if (!flag && density_->data[i] <= limit_)
-      for (std::size_t k = 0; k < moving.size() && !flag; ++k) flag = outer[moving[k].j] > 0.5;
+    bool flag = false;
+    for (std::size_t k = 0; k < moving.size() && !flag; ++k) flag = outer[moving[k].j] > 0.5;
     flag_->data[i] = flag ? 1.0 : 0.0;
   }
 

@@ -188,7 +188,9 @@ class Effect {
   // pass (the free-surface band: near an outermost particle) asks for a second sweep:
   // PairDriver::run then calls interactAgain for every moving particle after the pass, once
   // every interact has finished. A pass without such an effect runs no second sweep.
+  // sweepAgain(ctx, i) says whether particle i needs it (the others' neighbours are not gathered).
   virtual bool secondSweep() const { return false; }
+  virtual bool sweepAgain(const RhsContext<D>& ctx, Index i) const { return true; }
   virtual void interactAgain(const RhsContext<D>& ctx, Index i, std::span<const Neighbour<D>> moving,
                              std::span<const Neighbour<D>> fixed) const {}
 

@@ -43,18 +43,25 @@ class PairDriver {
                             [&](Index i, std::span<const Neighbour<D>> moving, std::span<const Neighbour<D>> fixed) {
                               for (Effect<D>* e : effects) e->interact(ctx, i, moving, fixed);
                             });
-    bool need_again = false, need_w_again = false;
+    // The second sweep gathers the neighbours only of the particles some effect asks for
+    // (Effect::sweepAgain): near a free surface, a few per cent of them.
+    std::vector<Effect<D>*>& again = again_;
+    again.clear();
     for (Effect<D>* e : effects)
-      if (e->secondSweep()) {
-        need_again = true;
-        need_w_again = need_w_again || e->needsKernelValue();
-      }
-    if (!need_again) return;
-    pairs_ += forEachMoving(ctx.particles, ctx.kernel, ctx.domain, list, need_w_again,
-                            [&](Index i, std::span<const Neighbour<D>> moving, std::span<const Neighbour<D>> fixed) {
-                              for (Effect<D>* e : effects)
-                                if (e->secondSweep()) e->interactAgain(ctx, i, moving, fixed);
-                            });
+      if (e->secondSweep()) again.push_back(e);
+    if (again.empty()) return;
+    auto wanted = [&](Index i) {
+      for (Effect<D>* e : again)
+        if (e->sweepAgain(ctx, i)) return true;
+      return false;
+    };
+    prepare(list);
+    pairs_ += loop<false>(ctx.particles, ctx.kernel, ctx.domain, list,
+                          [&](Index i, std::span<const Neighbour<D>> moving, std::span<const Neighbour<D>> fixed) {
+                            for (Effect<D>* e : again)
+                              if (e->sweepAgain(ctx, i)) e->interactAgain(ctx, i, moving, fixed);
+                          },
+                          wanted);
   }
 
   // The neighbour loop itself: fn(i, moving neighbours, fixed neighbours) for every moving
@@ -102,9 +109,11 @@ class PairDriver {
     }
   }
 
-  template <bool WithW, class Fn>
+  static constexpr bool everyParticle(Index) { return true; }
+
+  template <bool WithW, class Fn, class Pred = bool (*)(Index)>
   std::uint64_t loop(const ParticleSet<D>& p, const Kernel& kernel, const Domain<D>& domain,
-                     const NeighbourList<D>& list, Fn& fn) {
+                     const NeighbourList<D>& list, Fn&& fn, Pred&& wanted = everyParticle) {
     const std::size_t n = p.n_moving;
     std::uint64_t pairs = 0;
     kernel.visit([&](auto shape) {
@@ -113,6 +122,7 @@ class PairDriver {
         Neighbour<D>* buf = scratch_[static_cast<std::size_t>(omp_get_thread_num())].data();
 #pragma omp for schedule(static)
         for (std::size_t i = 0; i < n; ++i) {
+          if (!wanted(static_cast<Index>(i))) continue;
           const std::size_t nm = gather<WithW>(shape, p, kernel, domain, list, i, list.start[i], list.split[i], buf);
           const std::size_t nf = gather<WithW>(shape, p, kernel, domain, list, i, list.split[i], list.start[i + 1], buf + nm);
           pairs += nm + nf;
@@ -164,6 +174,7 @@ class PairDriver {
   }
 
   std::vector<std::vector<Neighbour<D>>> scratch_;
+  std::vector<Effect<D>*> again_;
   std::uint64_t pairs_ = 0;
 };
 
