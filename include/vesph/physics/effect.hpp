@@ -185,10 +185,11 @@ class Effect {
   virtual void prepare(const RhsContext<D>& ctx, std::size_t begin, std::size_t end) const {}
 
   // A pair effect whose result for particle i depends on its neighbours' results of the same
-  // pass (the free-surface band: near an outermost particle) asks for a second sweep:
-  // PairDriver::run then calls interactAgain for every moving particle after the pass, once
-  // every interact has finished. A pass without such an effect runs no second sweep.
-  // sweepAgain(ctx, i) says whether particle i needs it (the others' neighbours are not gathered).
+  // pass (free_surface with method = "marrone" and a threshold: is an outermost particle
+  // within the support?) asks for a second sweep: PairDriver::run then calls interactAgain,
+  // after every interact of the pass has finished, for each moving particle for which
+  // sweepAgain(ctx, i) is true (the others' neighbours are not gathered again). A pass without
+  // such an effect runs no second sweep.
   virtual bool secondSweep() const { return false; }
   virtual bool sweepAgain(const RhsContext<D>& ctx, Index i) const { return true; }
   virtual void interactAgain(const RhsContext<D>& ctx, Index i, std::span<const Neighbour<D>> moving,
