@@ -1,5 +1,5 @@
 # Disk blocks (Fang et al. 2006 §4: the Cartesian lattice cut by the circle), per-block initial
-# velocity, and free-surface detection by number density (thesis §4.2) and by Marrone's test.
+# velocity, and free-surface detection by number density (thesis §4.2) and by Marrone's test (2D, 3D).
 . "$(dirname "$0")/lib.sh"
 cat > "$WORK/drop.toml" <<'TOML'
 name = "drop"
@@ -140,6 +140,53 @@ expected = marrone | (nd & close)
 if not np.array_equal(near, expected):
     print(f"near: {int(np.sum(near != expected))} flags differ from marrone + number density within a support"); ok = False
 sys.exit(0 if ok else 1)
+PY
+# In 3D: a box of fluid (20 x 20 x 10 particles) resting on a wall; Marrone's test flags exactly
+# the top and side layers, not the row on the wall and nothing inside.
+cat > "$WORK/box3.toml" <<'TOML'
+name = "b3"
+dimension = 3
+[domain]
+min = [-0.004, -0.004, -0.0006]
+max = [0.004, 0.004, 0.004]
+[particles]
+spacing = 2.0e-4
+kernel = "cubic"
+smoothing_ratio = 1.5
+[fluid]
+density = 1000.0
+viscosity = 4.0
+[[blocks]]
+kind = "fluid"
+min = [-0.002, -0.002, 0.0]
+max = [0.002, 0.002, 0.002]
+[[blocks]]
+kind = "wall"
+min = [-0.003, -0.003, -0.0006]
+max = [0.003, 0.003, 0.0]
+[effects.continuity]
+[effects.equation_of_state]
+sound_speed = 12.5
+[effects.pressure_gradient]
+[effects.viscosity]
+[effects.free_surface]
+method = "marrone"
+[time]
+end = 1.0e-5
+[output]
+times = [1.0e-5]
+TOML
+expect 0 "ok: finished" -- "$VESPH" run "$WORK/box3.toml" -o "$WORK/box3" --quiet
+$PY - "$WORK/box3/b3.h5" <<'PY' && pass || fail "3D Marrone flags"
+import sys, h5py, numpy as np
+with h5py.File(sys.argv[1], "r") as f:
+    g = f["frames"]["000000"]
+    fluid = g["kind"][...] == 0
+    x, s = g["position"][...][fluid], g["free_surface"][...][fluid] == 1
+dx, half, height = 2e-4, 0.002, 0.002
+outer = (x[:, 2] > height - dx) | (np.abs(x[:, 0]) > half - dx) | (np.abs(x[:, 1]) > half - dx)
+print(f"{len(x)} fluid, {int(s.sum())} flagged, {int(outer.sum())} in the top and side layers")
+sys.exit(0 if len(x) == 4000 and np.array_equal(s, outer) else 1)
 PY
 expect 2 "effects.free_surface.lambda_interior: expected absent with method = \"number_density\"" -- "$VESPH" check "$WORK/fs.toml" \
   --set effects.free_surface.lambda_interior=0.7
