@@ -143,19 +143,12 @@ sys.exit(0 if ok else 1)
 PY
 # In 3D: a box of fluid (20 x 20 x 10 particles) resting on a wall; Marrone's test flags exactly
 # the top and side layers, not the row on the wall and nothing inside.
-cat > "$WORK/box3.toml" <<'TOML'
-name = "b3"
-dimension = 3
-[domain]
-min = [-0.004, -0.004, -0.0006]
-max = [0.004, 0.004, 0.004]
-[particles]
-spacing = 2.0e-4
-kernel = "cubic"
-smoothing_ratio = 1.5
-[fluid]
-density = 1000.0
-viscosity = 4.0
+# (the particles and the fluid of the 2D scene above)
+{
+  printf 'name = "b3"\ndimension = 3\n[domain]\nmin = [-0.004, -0.004, -0.0006]\nmax = [0.004, 0.004, 0.004]\n'
+  sed -n '/^\[particles\]/,/^viscosity/p' "$WORK/drop.toml"
+} > "$WORK/box3.toml"
+cat >> "$WORK/box3.toml" <<'TOML'
 [[blocks]]
 kind = "fluid"
 min = [-0.002, -0.002, 0.0]
