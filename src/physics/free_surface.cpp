@@ -59,12 +59,11 @@ class FreeSurface final : public Effect<D> {
       if (lambda_interior_ < lambda_surface_)
         cfg.fail("lambda_interior", "at least lambda_surface (" + std::to_string(lambda_surface_) + ")");
       near_surface_ = cfg.has("threshold");
-      threshold_ = cfg.numberIn("threshold", 0.8, 0.05, 0.99, "of the full-support number density");
     } else {
       for (const char* key : {"lambda_surface", "lambda_interior"})
         if (cfg.has(key)) cfg.fail(key, "absent with method = \"number_density\" (set method = \"marrone\")");
-      threshold_ = cfg.numberIn("threshold", 0.8, 0.05, 0.99, "of the full-support number density");
     }
+    threshold_ = cfg.numberIn("threshold", 0.8, 0.05, 0.99, "of the full-support number density");
   }
   std::string_view name() const override { return "free_surface"; }
   Phase phase() const override { return Phase::gradients; }

@@ -45,20 +45,19 @@ class PairDriver {
                             });
     // The second sweep gathers the neighbours only of the particles some effect asks for
     // (Effect::sweepAgain): near a free surface, a few per cent of them.
-    std::vector<Effect<D>*>& again = again_;
-    again.clear();
+    // The scratch is sized for this list already (forEachMoving above).
+    again_.clear();
     for (Effect<D>* e : effects)
-      if (e->secondSweep()) again.push_back(e);
-    if (again.empty()) return;
+      if (e->secondSweep()) again_.push_back(e);
+    if (again_.empty()) return;
     auto wanted = [&](Index i) {
-      for (Effect<D>* e : again)
+      for (Effect<D>* e : again_)
         if (e->sweepAgain(ctx, i)) return true;
       return false;
     };
-    prepare(list);
     pairs_ += loop<false>(ctx.particles, ctx.kernel, ctx.domain, list,
                           [&](Index i, std::span<const Neighbour<D>> moving, std::span<const Neighbour<D>> fixed) {
-                            for (Effect<D>* e : again)
+                            for (Effect<D>* e : again_)
                               if (e->sweepAgain(ctx, i)) e->interactAgain(ctx, i, moving, fixed);
                           },
                           wanted);
