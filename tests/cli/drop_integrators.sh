@@ -4,8 +4,9 @@
 # then the drop's initial speed) under leapfrog, midpoint, arkode-fixed and arkode, nothing but
 # the integrator type changed. To keep CI short they run at a quarter of the resolution
 # (dx = 0.08 cm, D/dx = 25, about 490 particles) to t V/D = 2 (through the impact at 1.5 and
-# the fastest spreading). Each run must finish (status ok), keep the volume within 1 % and not fracture (tools/drop_measure.py), and
-# the four integrators must agree on the spread at t V/D = 2 within 3 % of D.
+# the fastest spreading). Each run must finish (status ok), keep the volume within 1 % and not
+# fracture (tools/drop_measure.py), and the four integrators must agree on the spread at
+# t V/D = 2 within 3 % of D.
 # (ISPH: the volume sum m/rho is constant by construction; the check still runs.)
 # The full-resolution runs are in docs/validation.md §10 and §11.
 . "$(dirname "$0")/lib.sh"
