@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
 
 #include "vesph/core/renormalisation.hpp"
@@ -76,6 +77,8 @@ Projection<D>::Projection(ConfigTable& cfg) {
   consistent_ = cfg.choice("laplacian", "consistent", {"consistent", "morris"}) == "consistent";
   const std::string g = cfg.choice("gradient", "renormalised", {"renormalised", "difference", "symmetric"});
   gradient_ = g == "renormalised" ? Gradient::renormalised : g == "difference" ? Gradient::difference : Gradient::symmetric;
+  predictor_ = cfg.choice("carried_pressure", "increment", {"increment", "predictor"}) == "predictor";
+  no_penetration_ = cfg.choice("wall_condition", "hydrostatic", {"hydrostatic", "no_penetration"}) == "no_penetration";
   cleaning_ = cfg.boolean("divergence_cleaning", false);
   if (cleaning_) {
     // Direct solvers only: the matrix is near-singular (header), and conjugate gradients did
@@ -105,6 +108,13 @@ void Projection<D>::setup(Setup<D>& s) {
   // With [effects.pressure_gradient] the right-hand side carries the last projection's
   // pressure through the step, and the projection corrects it (incremental form, header).
   incremental_ = s.find("pressure_gradient") != nullptr;
+  if (predictor_ && !incremental_)
+    throw InputError("solver.carried_pressure = \"predictor\" needs [effects.pressure_gradient] (the pressure the "
+                     "right-hand side carries); without it every projection solves for the whole pressure anyway");
+  if (no_penetration_ && incremental_ && !predictor_)
+    throw InputError("solver.wall_condition = \"no_penetration\" is not implemented with the incremental form "
+                     "(carried_pressure = \"increment\"): the push would be carried on into the next steps; use "
+                     "carried_pressure = \"predictor\" (docs/theory.md §10)");
   g_ = s.body_acceleration;
   rho0_ = s.rest_density;
 }
@@ -142,7 +152,34 @@ void Projection<D>::numberUnknowns(const SphSystem<D>& sys) {
 }
 
 template <int D>
-void Projection<D>::wallExtrapolation(const SphSystem<D>& sys) {
+void Projection<D>::wallNormals(SphSystem<D>& sys) {
+  // n_i = -sum_w V_w grad_i W_iw / |.|: away from the wall particles in i's support (for a
+  // particle over a flat wall the wall's normal, also at the edge of a spreading film, where the
+  // wall extends on both sides of it; at a corner the bisector). Zero without wall neighbours.
+  // gap_i: how far i may still approach the walls before it reaches the rest distance of the
+  // lattice (half a spacing above the wall surface, i.e. one spacing from the first wall row).
+  const ParticleSet<D>& P = sys.particles;
+  wall_normal_.assign(P.n_moving, Vec<D>::Zero());
+  wall_gap_.assign(P.n_moving, 0.0);
+  const double* m = P.mass.data();
+  const double* rho = P.density.data();
+  sys.driver.forEachMoving(P, sys.kernel, sys.domain, sys.neighbours, false,
+                           [&](Index i, std::span<const Neighbour<D>>, std::span<const Neighbour<D>> fixed) {
+                             Vec<D> s = Vec<D>::Zero();
+                             for (const Neighbour<D>& nb : fixed) s -= (m[nb.j] / rho[nb.j] * nb.F) * nb.rij;
+                             const double norm = s.norm();
+                             if (norm == 0) return;
+                             const Vec<D> n = s / norm;
+                             wall_normal_[i] = n;
+                             double nearest = std::numeric_limits<double>::infinity();
+                             for (const Neighbour<D>& nb : fixed) nearest = std::min(nearest, n.dot(nb.rij));
+                             const double spacing = std::pow(m[i] / rho[i], 1.0 / D);
+                             wall_gap_[i] = std::max(0.0, nearest - spacing);
+                           });
+}
+
+template <int D>
+void Projection<D>::wallExtrapolation(const SphSystem<D>& sys, double dt) {
   const ParticleSet<D>& P = sys.particles;
   const NeighbourList<D>& list = sys.neighbours;
   const std::size_t n = P.n_moving, N = P.size();
@@ -150,30 +187,46 @@ void Projection<D>::wallExtrapolation(const SphSystem<D>& sys) {
   wall_offset_.assign(N - n, 0.0);
   const CandidateGeometry<D> geo = candidateGeometry(sys);
   const Vec<D> rho_g = rho0_ * g_;
+  const double* v = P.velocity.data();
   sys.kernel.visit([&](auto shape) {
 #pragma omp parallel for schedule(static) if (N - n >= kParallelMinimum)
     for (std::size_t w = n; w < N; ++w) {
-      double sumW = 0, offset = 0;
+      double sumW = 0, offset = 0, push = 0;
       Vec<D> rij;
       double W, F;
       for (std::size_t k = list.start[w]; k < list.split[w]; ++k) {
-        if (geo(shape, w, list.nbr[k], rij, W, F)) {
+        const std::size_t f = list.nbr[k];
+        if (geo(shape, w, f, rij, W, F)) {
           wall_weight_[k] = W;
           sumW += W;
           offset += rho_g.dot(rij) * W;  // rij = r_w - r_f
+          if (no_penetration_) {
+            // The normal velocity of f relative to the wall beyond what closes its gap within
+            // dt: delta < 0 is an approach the correction must stop, and the wall pressure
+            // rho0 delta (n_f . r_wf) / dt above f's does (header, step 2). Only a push: the
+            // walls do not hold the fluid back where it moves away.
+            const Vec<D>& nf = wall_normal_[f];
+            double un = 0;
+            for (int a = 0; a < D; ++a) un += (v[D * f + a] - v[D * w + a]) * nf[a];
+            const double delta = un + wall_gap_[f] / dt;
+            push += rho0_ * std::min(delta, 0.0) * nf.dot(rij) * W;
+          }
         } else {
           wall_weight_[k] = 0.0;
         }
       }
       const double inv = sumW > 0 ? 1.0 / sumW : 0.0;
       for (std::size_t k = list.start[w]; k < list.split[w]; ++k) wall_weight_[k] *= inv;
-      wall_offset_[w - n] = offset * inv;
+      // Without no_penetration: the hydrostatic part (Adami et al. eq. 27). With it, the push
+      // alone: the velocity it answers (v* of the plain form, v** of the predictor form)
+      // carries dt g, so the hydrostatic part is in it.
+      wall_offset_[w - n] = no_penetration_ ? push * inv / dt : offset * inv;
     }
   });
 }
 
 template <int D>
-double Projection<D>::divergence(SphSystem<D>& sys, const Vec<D>& wall_shift) {
+double Projection<D>::divergence(SphSystem<D>& sys, const Vec<D>& wall_shift, bool tangential_walls) {
   const ParticleSet<D>& P = sys.particles;
   const std::size_t n = P.n_moving;
   divergence_.resize(n);
@@ -189,10 +242,12 @@ double Projection<D>::divergence(SphSystem<D>& sys, const Vec<D>& wall_shift) {
                                acc += m[nb.j] * d * nb.F;
                              }
                              for (const Neighbour<D>& nb : fixed) {
-                               double d = 0;
-                               for (int a = 0; a < D; ++a)
-                                 d += (v[D * i + a] - v[D * nb.j + a] - wall_shift[a]) * nb.rij[a];
-                               acc += m[nb.j] * d * nb.F;
+                               Vec<D> u;
+                               for (int a = 0; a < D; ++a) u[a] = v[D * i + a] - v[D * nb.j + a] - wall_shift[a];
+                               // no_penetration: the normal flux into the wall is the walls'
+                               // Neumann data (wallExtrapolation), not a source
+                               if (tangential_walls) u -= u.dot(wall_normal_[i]) * wall_normal_[i];
+                               acc += m[nb.j] * u.dot(nb.rij) * nb.F;
                              }
                              divergence_[i] = -acc / rho[i];
                            });
@@ -529,10 +584,17 @@ void Projection<D>::start(SphSystem<D>& sys, double t, double* y) {
   for (std::size_t k = 0; k < n * D; ++k) P.velocity[k] = dvdt[k];
   flagFreeSurface(sys, t);
   numberUnknowns(sys);
-  wallExtrapolation(sys);
+  if (no_penetration_) wallNormals(sys);
+  wallExtrapolation(sys, 1.0);
   // As in the plain form: the walls move with g in the source (the hydrostatic wall offsets
-  // answer it), since there is no previous pressure whose offsets would cancel them.
-  divergence(sys, g_);
+  // answer it), since there is no previous pressure whose offsets would cancel them; with
+  // no_penetration the normal velocity is in the wall offsets and the walls' normal flux leaves
+  // the source (the "velocity" is the acceleration over dt = 1 here, against which the gaps,
+  // in metres, are negligible).
+  if (no_penetration_)
+    divergence(sys, Vec<D>::Zero(), true);
+  else
+    divergence(sys, g_);
   gradientRows(sys, gradient_, true);
   assemble(sys, 1.0, operator_(), incremental_, pressure_system_);
   solution_.setZero(static_cast<Eigen::Index>(n_unknowns_));
@@ -551,13 +613,32 @@ void Projection<D>::apply(SphSystem<D>& sys, double t, double dt, double* y) {
   if (sys.neighbours.update(P)) sys.driver.prepare(sys.neighbours);
   flagFreeSurface(sys, t);
   numberUnknowns(sys);
-  wallExtrapolation(sys);
-  // The divergence of v* with the walls at rest (reported, and the source of the incremental
-  // form); the plain form's source counts the walls with u_w + dt g (header).
-  last_.divergence_before = divergence(sys, Vec<D>::Zero());
-  if (!incremental_) divergence(sys, Vec<D>(dt * g_));
   gradientRows(sys, gradient_, true);
-  assemble(sys, dt, operator_(), incremental_, pressure_system_);
+  // The divergence of v* with the walls at rest (reported, and the source of the incremental
+  // form); the plain form's source counts the walls with u_w + dt g (header); no_penetration
+  // leaves the walls' normal flux out of the source (it is in their offsets).
+  last_.divergence_before = divergence(sys, Vec<D>::Zero());
+  if (predictor_) {
+    // The carried pressure only predicted the stages' pressure force: take its share out of v*
+    // (v** = v* + dt G p^n) and solve for the whole pressure below.
+    const double* pn = pressure_->data.data();
+    double* v = P.velocity.data();
+    const std::size_t n = P.n_moving;
+#pragma omp parallel for schedule(static) if (n >= kParallelMinimum)
+    for (std::size_t k = 0; k < n; ++k) {
+      Vec<D> a = Vec<D>::Zero();
+      for (std::size_t e = sys.neighbours.start[k] + k, e1 = sys.neighbours.start[k + 1] + k + 1; e < e1; ++e)
+        a += pn[g_index_[e]] * g_coef_[e];
+      for (int c = 0; c < D; ++c) v[D * k + c] += dt * a[c];
+    }
+  }
+  if (no_penetration_) wallNormals(sys);
+  wallExtrapolation(sys, dt);
+  if (no_penetration_)
+    divergence(sys, Vec<D>::Zero(), true);
+  else if (!incremental_ || predictor_)
+    divergence(sys, Vec<D>(dt * g_));
+  assemble(sys, dt, operator_(), incremental_ && !predictor_, pressure_system_);
   // A closed domain (pinned pressure): the Neumann problem has a solution only when the
   // sources sum to zero; the discrete sources do not quite, and the pin would take the
   // remainder as a point source at one particle. Removing the mean spreads it evenly.

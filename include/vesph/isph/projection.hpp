@@ -34,6 +34,17 @@
 //      The walls' pressure is extrapolated from the fluid as in WCSPH (Adami et al. 2012,
 //      eq. 27: p_w = sum_f p_f W_wf / sum_f W_wf + rho0 g . sum_f (r_w - r_f) W_wf / sum_f W_wf)
 //      and eliminated into the fluid rows: the discrete Neumann condition grad p . n = rho g . n;
+//      with solver.wall_condition = "no_penetration" (plain and predictor forms) instead
+//          p_w = sum_f c_wf p_f + rho0 sum_f c_wf min(delta_f, 0) (n_f . r_wf) / dt,
+//          delta_f = (u_f - u_w) . n_f + gap_f / dt,
+//      u the velocity the projection corrects (v* or v**, below), n_f = -sum_w V_w grad W_fw/|.|
+//      the unit normal away from the walls in f's support, gap_f = max(0, min_w n_f . r_fw - dx)
+//      how far f may still approach before it reaches the lattice's rest distance (dx/2 above
+//      the wall surface): the discrete form of grad p . n = rho (u - u_w) . n / dt, applied only
+//      where f would otherwise come closer than that within dt (the walls push, never pull);
+//      the normal flux into the walls then leaves the source divergence (it is these Neumann
+//      data, not a volume source). A fluid at rest under gravity gets u . n = dt g . n and the
+//      hydrostatic wall pressure as before.
 //      Incremental form (Goda 1979; van Kan 1986), when the scene lists
 //      [effects.pressure_gradient]: the right-hand side then carries the last projection's
 //      pressure p^n through the step (best with form = "renormalised", the gradient below), so
@@ -44,6 +55,15 @@
 //      p^{n+1} - p^n in step 3. A fluid in equilibrium then stays exactly in equilibrium: without
 //      it, the stages see v* = v + t g without the pressure that balances g, and the viscous
 //      term of a no-slip wall acts on that spurious motion (a splitting error of O(nu dt / h^2)).
+//      solver.carried_pressure = "predictor" keeps the carried pressure in the right-hand side
+//      but solves each projection for the whole pressure: with v** = v* + dt G p^n (the stages'
+//      pressure force taken out again, G at the step's end positions),
+//          L p^{n+1} = -rho_i div(v**)_i / dt,   v^{n+1} = v** - dt G p^{n+1}
+//      (the plain form's equation and walls; the correction is the same G (p^{n+1} - p^n) on v*).
+//      Were L = rho div_h G the two would agree; for the approximate projection the increment
+//      form keeps, step after step, whatever part of p^n the mismatch L - rho div_h G leaves
+//      unanswered (pressure modes that G hardly moves) and the predictor form forgets it
+//      (docs/theory.md §10 has what each does in the tank, a block impact and the drops).
 //      The incremental form starts from the pressure that makes the initial acceleration
 //      divergence-free (the same equation with v* the initial pressure-free acceleration and
 //      dt = 1): a fluid that starts at rest under gravity starts with its hydrostatic pressure.
@@ -128,7 +148,8 @@ class Projection final : public StepHook<D> {
   };
   void flagFreeSurface(SphSystem<D>& sys, double t);
   void numberUnknowns(const SphSystem<D>& sys);
-  void wallExtrapolation(const SphSystem<D>& sys);
+  void wallExtrapolation(const SphSystem<D>& sys, double dt);
+  void wallNormals(SphSystem<D>& sys);
   // One assembled matrix with the record of its sparsity pattern (the direct solvers keep their
   // symbolic analysis while it holds): the pressure equation's, and the cleaning's.
   struct Assembled {
@@ -143,7 +164,7 @@ class Projection final : public StepHook<D> {
   void assemble(SphSystem<D>& sys, double dt, Laplacian op, bool incremental, Assembled& out);
   Laplacian operator_() const { return consistent_ ? Laplacian::consistent : Laplacian::morris; }
   void clean(SphSystem<D>& sys, double t, double dt, double* y);
-  double divergence(SphSystem<D>& sys, const Vec<D>& wall_shift);
+  double divergence(SphSystem<D>& sys, const Vec<D>& wall_shift, bool tangential_walls = false);
   void correct(SphSystem<D>& sys, double dt, double* y, bool cleaning);
   void correctPositions(SphSystem<D>& sys, double dt, double* y);
   void storePressure(const SphSystem<D>& sys);
@@ -151,6 +172,11 @@ class Projection final : public StepHook<D> {
   LinearSolverOptions options_;
   Gradient gradient_ = Gradient::renormalised;
   bool consistent_ = true, incremental_ = false, cleaning_ = false;
+  // solver.wall_condition = "no_penetration": the walls' Neumann data carry the fluid's normal
+  // velocity (header, step 2) instead of the hydrostatic balance alone.
+  bool no_penetration_ = false, predictor_ = false;
+  std::vector<Vec<D>> wall_normal_;     // per moving particle: unit normal away from the walls (0: none near)
+  std::vector<double> wall_gap_;        // per moving particle: the approach left before the rest distance, m
   LinearSolverOptions cleaning_options_;
   std::unique_ptr<LinearSolver> cleaning_solver_;
   std::vector<double> multiplier_;
