@@ -3,7 +3,8 @@
 #    within the foundation's 2 % of the analytic solution under every integrator;
 #  - hydrostatic tank (cases/hydrostatic_tank_isph.toml, to t = 0.6 s): pressure within 2 % of
 #    rho g depth below the first three particle layers at every frame, max speed below
-#    1e-3 sqrt(g H) after settling (t >= 0.5 s; the start-up transient is 5e-3 at t = 0.1 s);
+#    1e-3 sqrt(g H) after settling (t >= 0.5 s); with the case's predictor form within 1e-3
+#    from 0.2 s and 2e-4, which the incremental form does not reach;
 #  - divergence cleaning (tank to t = 0.3 s): discrete divergence after / before < 1e-6 at every
 #    step, pressure still within 2 %;
 #  - the linear solvers (umfpack, klu, bicgstab with diagonal and ILUT preconditioners) give
@@ -34,6 +35,19 @@ expect 0 "ok: finished" -- "$VESPH" run "$T" -o "$WORK/tank" --quiet --set time.
 (cd "$SRC/tools" && $PY hydrostatic_check.py "$WORK/tank/hydrostatic_tank_isph.h5" --from 0.5) >"$WORK/tank2.log" 2>&1 && pass ||
   fail "hydrostatic tank after settling: $(tail -5 "$WORK/tank2.log")"
 $PY "$SRC/tools/check_output.py" "$WORK/tank" >"$WORK/tank_out.log" 2>&1 && pass || fail "tank output not valid: $(tail -3 "$WORK/tank_out.log")"
+# The case's predictor form (solver.carried_pressure = "predictor") settles far closer than the
+# 2 % / 1e-3 of the issue: pressure within 1e-3 of rho g H from 0.2 s, after the start-up
+# (measured 1.1e-4 at 0.2 s, 4.1e-3 at 0.1 s), speed below 2e-4 sqrt(gH) from 0.5 s (measured
+# 9.0e-5). The incremental form, which keeps what earlier steps left in the pressure, does not
+# reach 1e-3 (measured 5.4e-3 at 0.25 s).
+(cd "$SRC/tools" && $PY hydrostatic_check.py "$WORK/tank/hydrostatic_tank_isph.h5" --from 0.2 --tolerance 1e-3 --max-speed 1e9) >"$WORK/tank3.log" 2>&1 && pass ||
+  fail "predictor tank pressure within 1e-3: $(tail -5 "$WORK/tank3.log")"
+(cd "$SRC/tools" && $PY hydrostatic_check.py "$WORK/tank/hydrostatic_tank_isph.h5" --from 0.5 --max-speed 2e-4) >"$WORK/tank4.log" 2>&1 && pass ||
+  fail "predictor tank speed below 2e-4: $(tail -5 "$WORK/tank4.log")"
+expect 0 "ok: finished" -- "$VESPH" run "$T" -o "$WORK/tank_inc" --quiet --set time.end=0.3 --set output.interval=0.25 \
+  --set 'solver.carried_pressure="increment"'
+(cd "$SRC/tools" && $PY hydrostatic_check.py "$WORK/tank_inc/hydrostatic_tank_isph.h5" --from 0.2 --tolerance 1e-3 --max-speed 1e9) >"$WORK/tank5.log" 2>&1 &&
+  fail "the incremental tank reached 1e-3 of rho g H (the contrast to the predictor form is gone): $(tail -3 "$WORK/tank5.log")" || pass
 
 # Divergence cleaning (solver.divergence_cleaning): the discrete divergence after the exact
 # projection is below 1e-6 of the divergence of v* at every step (issue 6), the pressure stays
