@@ -5,8 +5,8 @@
 #   - stay in one piece (one fragment in every frame),
 #   - keep its interior summation density within 1 % of the first frame (its sum m/rho is
 #     constant by construction, so this is the volume measure; measured 0.6 % at most),
-#   - spread with the WCSPH drop: width/D within 0.1 of it at t V/D = 2, 2.5, 3 (measured 0.076
-#     at most),
+#   - spread with the WCSPH drop: width/D within 0.05 of it at t V/D = 2, 2.5, 3 (measured 0.041
+#     at most with the case's predictor form; the incremental form, 0.076, fails this),
 #   - spread monotonically (a Newtonian drop without surface tension has nothing to pull it
 #     back): width/D never more than 0.01 below its largest earlier value. With the
 #     renormalised pressure gradient the drop retracted from 1.66 D at 2 to 1.59 D at 3.
@@ -24,7 +24,7 @@ for c in newtonian newtonian_isph; do
     fail "$c: drop_measure failed: $(tail -4 "$WORK/m_$c.log")"
 done
 $PY "$SRC/tests/cli/drop_compare.py" "$WORK/newtonian/drop_newtonian_drop.csv" "$WORK/newtonian_isph/drop_newtonian_isph_drop.csv" \
-  --times 2,2.5,3 --max-width-diff 0.1 --max-setback 0.01 >"$WORK/compare.log" 2>&1 && pass ||
+  --times 2,2.5,3 --max-width-diff 0.05 --max-setback 0.01 >"$WORK/compare.log" 2>&1 && pass ||
   fail "ISPH against WCSPH: $(tail -3 "$WORK/compare.log")"
 cat "$WORK/compare.log"
 finish
