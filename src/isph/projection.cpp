@@ -776,7 +776,10 @@ std::string Projection<D>::describe() const {
      << ", linear solver " << solver_->name() << ", pressure gradient " << grad << ";\n#   "
      << (has_free_surface_ ? "p = 0 on the particles [effects.free_surface] flags"
                            : "no free-surface detection: p = 0 at one pinned fluid particle (closed or periodic domain)")
-     << "\n";
+     << ";\n#   " << (!incremental_ ? "plain form (no pressure carried in the right-hand side)"
+                      : predictor_  ? "carried pressure as the stages' predictor, the whole pressure solved every step"
+                                    : "incremental form (the pressure increment solved every step)")
+     << "; walls " << (no_penetration_ ? "no_penetration (stop the approach closer than dx/2)" : "hydrostatic (Adami)") << "\n";
   if (cleaning_)
     os << "#   then divergence cleaning: the exact projection onto discretely divergence-free velocities ("
        << cleaning_solver_->name() << ")\n";

@@ -173,7 +173,8 @@ class Projection final : public StepHook<D> {
   Gradient gradient_ = Gradient::renormalised;
   bool consistent_ = true, incremental_ = false, cleaning_ = false;
   // solver.wall_condition = "no_penetration": the walls' Neumann data carry the fluid's normal
-  // velocity (header, step 2) instead of the hydrostatic balance alone.
+  // velocity (header, step 2) instead of the hydrostatic balance alone; solver.carried_pressure
+  // = "predictor": the whole pressure solved every step (header, incremental form).
   bool no_penetration_ = false, predictor_ = false;
   std::vector<Vec<D>> wall_normal_;     // per moving particle: unit normal away from the walls (0: none near)
   std::vector<double> wall_gap_;        // per moving particle: the approach left before the rest distance, m
