@@ -191,7 +191,7 @@ void Projection<D>::wallExtrapolation(const SphSystem<D>& sys, double dt) {
   sys.kernel.visit([&](auto shape) {
 #pragma omp parallel for schedule(static) if (N - n >= kParallelMinimum)
     for (std::size_t w = n; w < N; ++w) {
-      double sumW = 0, offset = 0, push = 0;
+      double sumW = 0, offset = 0, push = 0;  // offset: hydrostatic; push: no_penetration
       Vec<D> rij;
       double W, F;
       for (std::size_t k = list.start[w]; k < list.split[w]; ++k) {
@@ -199,8 +199,9 @@ void Projection<D>::wallExtrapolation(const SphSystem<D>& sys, double dt) {
         if (geo(shape, w, f, rij, W, F)) {
           wall_weight_[k] = W;
           sumW += W;
-          offset += rho_g.dot(rij) * W;  // rij = r_w - r_f
-          if (no_penetration_) {
+          if (!no_penetration_) {
+            offset += rho_g.dot(rij) * W;  // rij = r_w - r_f
+          } else {
             // The normal velocity of f relative to the wall beyond what closes its gap within
             // dt: delta < 0 is an approach the correction must stop, and the wall pressure
             // rho0 delta (n_f . r_wf) / dt above f's does (header, step 2). Only a push: the
@@ -223,6 +224,23 @@ void Projection<D>::wallExtrapolation(const SphSystem<D>& sys, double dt) {
       wall_offset_[w - n] = no_penetration_ ? push * inv / dt : offset * inv;
     }
   });
+}
+
+template <int D>
+void Projection<D>::wallsAndSource(SphSystem<D>& sys, double dt, bool whole_pressure) {
+  // The walls' Neumann data and the source divergence of the velocity in P.velocity (header,
+  // step 2). Solving for the whole pressure (plain and predictor forms, the initial pressure),
+  // the hydrostatic wall offsets answer the body force's share dt g of that velocity, so the
+  // walls enter the source moving with u_w + dt g; solving for the increment, the offsets of
+  // p^{n+1} and p^n cancel and the walls enter at rest (divergence_ then holds the divergence
+  // computed for the report). no_penetration: the normal velocity is in the wall offsets and
+  // the walls' normal flux leaves the source.
+  if (no_penetration_) wallNormals(sys);
+  wallExtrapolation(sys, dt);
+  if (no_penetration_)
+    divergence(sys, Vec<D>::Zero(), true);
+  else if (whole_pressure)
+    divergence(sys, Vec<D>(dt * g_));
 }
 
 template <int D>
@@ -584,17 +602,10 @@ void Projection<D>::start(SphSystem<D>& sys, double t, double* y) {
   for (std::size_t k = 0; k < n * D; ++k) P.velocity[k] = dvdt[k];
   flagFreeSurface(sys, t);
   numberUnknowns(sys);
-  if (no_penetration_) wallNormals(sys);
-  wallExtrapolation(sys, 1.0);
-  // As in the plain form: the walls move with g in the source (the hydrostatic wall offsets
-  // answer it), since there is no previous pressure whose offsets would cancel them; with
-  // no_penetration the normal velocity is in the wall offsets and the walls' normal flux leaves
-  // the source (the "velocity" is the acceleration over dt = 1 here, against which the gaps,
-  // in metres, are negligible).
-  if (no_penetration_)
-    divergence(sys, Vec<D>::Zero(), true);
-  else
-    divergence(sys, g_);
+  // As in the plain form (there is no previous pressure whose wall offsets would cancel the
+  // hydrostatic ones); with no_penetration the "velocity" is the acceleration over dt = 1 here,
+  // against which the gaps, in metres, are negligible.
+  wallsAndSource(sys, 1.0, true);
   gradientRows(sys, gradient_, true);
   assemble(sys, 1.0, operator_(), incremental_, pressure_system_);
   solution_.setZero(static_cast<Eigen::Index>(n_unknowns_));
@@ -615,8 +626,7 @@ void Projection<D>::apply(SphSystem<D>& sys, double t, double dt, double* y) {
   numberUnknowns(sys);
   gradientRows(sys, gradient_, true);
   // The divergence of v* with the walls at rest (reported, and the source of the incremental
-  // form); the plain form's source counts the walls with u_w + dt g (header); no_penetration
-  // leaves the walls' normal flux out of the source (it is in their offsets).
+  // form; wallsAndSource below computes the other forms' source).
   last_.divergence_before = divergence(sys, Vec<D>::Zero());
   if (predictor_) {
     // The carried pressure only predicted the stages' pressure force: take its share out of v*
@@ -632,12 +642,7 @@ void Projection<D>::apply(SphSystem<D>& sys, double t, double dt, double* y) {
       for (int c = 0; c < D; ++c) v[D * k + c] += dt * a[c];
     }
   }
-  if (no_penetration_) wallNormals(sys);
-  wallExtrapolation(sys, dt);
-  if (no_penetration_)
-    divergence(sys, Vec<D>::Zero(), true);
-  else if (!incremental_ || predictor_)
-    divergence(sys, Vec<D>(dt * g_));
+  wallsAndSource(sys, dt, !incremental_ || predictor_);
   assemble(sys, dt, operator_(), incremental_ && !predictor_, pressure_system_);
   // A closed domain (pinned pressure): the Neumann problem has a solution only when the
   // sources sum to zero; the discrete sources do not quite, and the pin would take the

@@ -150,6 +150,7 @@ class Projection final : public StepHook<D> {
   void numberUnknowns(const SphSystem<D>& sys);
   void wallExtrapolation(const SphSystem<D>& sys, double dt);
   void wallNormals(SphSystem<D>& sys);
+  void wallsAndSource(SphSystem<D>& sys, double dt, bool whole_pressure);
   // One assembled matrix with the record of its sparsity pattern (the direct solvers keep their
   // symbolic analysis while it holds): the pressure equation's, and the cleaning's.
   struct Assembled {
