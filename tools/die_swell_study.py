@@ -5,8 +5,8 @@ command per study, each run a scene derived from cases/die_swell_second_order_fl
 Usage
 -----
     /usr/bin/python3 tools/die_swell_study.py STUDY [STUDY ...]
-        [--across N] [--jobs J] [--out DIR] [--vesph PATH] [--only LABEL ...]
-        [--dry-run] [--measure-only] [--no-png]
+        [--across N] [--scheme wcsph|isph] [--jobs J] [--out DIR] [--vesph PATH]
+        [--only LABEL ...] [--dry-run] [--measure-only] [--no-png]
 
 STUDY is one of (thesis §4.4; v is the centreline velocity, De = |alpha1| v / (mu W),
 Re = rho W v / mu with rho = 1000 kg/m^3, mu = 10 Pa s, W = 0.01 m; alpha2 = -0.1 alpha1):
@@ -19,7 +19,8 @@ Re = rho W v / mu with rho = 1000 kg/m^3, mu = 10 Pa s, W = 0.01 m; alpha2 = -0.
                v = 6.8 m/s, alpha1 = -4e-3 (De = 0.272)
   procedures   §4.4.2: Case 1-4 at v = 3.4 m/s, alpha1 = -2.8e-3 (De = 0.0952)
   wsph_isph    §4.4.6: WCSPH and ISPH at v = 6.8 m/s, alpha1 = -4e-3 (thesis 1.362, 1.355);
-               the ISPH scene takes grad p by eq. 3.16 and p = 0 on detected free surface
+               the ISPH scene: p = 0 on detected free surface, symmetric grad p (eq. 3.18),
+               predictor projection and no-penetration walls (docs/user-guide.md [solver])
   frontier     beyond §4.4.5's limits (De 0.3 at Re 5, 0.5 at Re 10): Re = 10 with
                De = 0.75, 1.0, 1.5, 2.0 (leapfrog) and 1.0, 1.5 (adaptive ARKODE), Re = 5
                with De = 0.4, 1.0 (leapfrog) and 1.0 (ARKODE); and the Oldroyd-B fluid of
@@ -50,6 +51,10 @@ is 0.1 of the ratio. Per study: OUT/STUDY/STUDY.csv (one row per run: the parame
 status, steps, wall time, steady swell mean/std per station and average, the filled
 (void-free) swell of die_swell_measure.py, clusters, detached particles, stable), and
 OUT/STUDY/STUDY.png.
+
+--scheme isph runs every run of the named studies with the wsph_isph study's ISPH scene
+(projection instead of the equation of state) and files them under OUT/STUDY_isph/ (CSV
+STUDY_isph.csv), beside the WCSPH ones; not with wsph_isph, which has both.
 
 --dry-run writes the scenes and prints the commands without running them; --measure-only
 tabulates runs already present. --only LABEL restricts a study to the named runs.
@@ -211,11 +216,14 @@ def scene_for(run, across):
         for k in ("continuity", "equation_of_state", "density_diffusion"):
             e.pop(k, None)
         e["free_surface"] = {"threshold": 0.97}
-        # grad p by thesis eq. 3.16 (Case 3's own form): with p = 0 imposed on the free surface
-        # it holds the die exit; the symmetric eq. 3.18 that the WCSPH runs need there blows
-        # the ISPH die up at the exit within 3.5 ms (Newtonian too; docs/studies.md §5).
-        e["pressure_gradient"]["form"] = "difference"
-        s["solver"] = {"scheme": "isph", "linear_solver": "umfpack"}
+        # The whole pressure solved each step from the velocity with the carried pressure force
+        # taken out ("predictor"), walls that hold the particles half a spacing off their
+        # surface ("no_penetration"), and the symmetric grad p (thesis eq. 3.18) both in the
+        # right-hand side and in the velocity correction: the first combination that runs the
+        # ISPH die through the whole run at 10 across (docs/studies.md §5). With the
+        # incremental form the symmetric grad p blows the die up at the exit within 3.5 ms.
+        s["solver"] = {"scheme": "isph", "linear_solver": "umfpack", "gradient": "symmetric",
+                       "carried_pressure": "predictor", "wall_condition": "no_penetration"}
     s["integrator"] = {"type": run.integrator}
     s["time"] = {"end": g6(0.045 * scale * run.duration)}
     s["output"] = {"interval": g6(0.002 * scale)}
@@ -423,6 +431,9 @@ def main(argv=None):
                     help="one or more of " + ", ".join(STUDIES))
     ap.add_argument("--across", type=int, default=10, metavar="N",
                     help="particles across the die (default 10; thesis 25)")
+    ap.add_argument("--scheme", choices=("wcsph", "isph"), default="wcsph",
+                    help="pressure treatment of every run (default wcsph; isph: the wsph_isph "
+                         "study's ISPH scene, results under OUT/STUDY_isph)")
     ap.add_argument("--jobs", type=int, default=max(1, os.cpu_count() or 1), metavar="J",
                     help="runs at once (each uses one core: set OMP_NUM_THREADS)")
     ap.add_argument("--out", default="out/die_swell_study", metavar="DIR")
@@ -436,23 +447,29 @@ def main(argv=None):
         ap.error("--across must be >= 5 (particles across the die)")
     if not (a.dry_run or a.measure_only) and not shutil.which(a.vesph) and not os.path.exists(a.vesph):
         ap.error(f"--vesph {a.vesph}: no such executable (build first: see README)")
+    if a.scheme == "isph" and "wsph_isph" in a.studies:
+        ap.error("--scheme isph: the wsph_isph study already runs both schemes")
     status = 0
     for study in a.studies:
         runs = study_runs(study)
+        for r in runs:
+            if a.scheme == "isph":
+                r.scheme = "isph"
         if a.only:
             unknown = set(a.only) - {r.label for r in runs}
             runs = [r for r in runs if r.label in a.only]
             if not runs:
                 ap.error(f"--only: no run of study {study} is named {sorted(unknown)}; "
                          f"its runs: {[r.label for r in study_runs(study)]}")
-        sd = os.path.join(a.out, study)
+        name = study + ("_isph" if a.scheme == "isph" else "")
+        sd = os.path.join(a.out, name)
         todo = []
         for r in runs:
             d = os.path.join(sd, r.label)
             os.makedirs(d, exist_ok=True)
             if not a.measure_only:
                 with open(os.path.join(d, r.label + ".toml"), "w") as fh:
-                    fh.write(f"# die_swell_study.py {study}: {r.label} (De = {r.De:.4g}, "
+                    fh.write(f"# die_swell_study.py {name}: {r.label} (De = {r.De:.4g}, "
                              f"Re = {r.Re:.4g}, {a.across} across)\n")
                     fh.write(toml_dumps(scene_for(r, a.across)) + "\n")
             todo.append((r, d))
@@ -463,7 +480,7 @@ def main(argv=None):
         results = {}
         if not a.measure_only:
             env_note = os.environ.get("OMP_NUM_THREADS")
-            print(f"== {study}: {len(todo)} runs, {a.jobs} at once, {a.across} across"
+            print(f"== {name}: {len(todo)} runs, {a.jobs} at once, {a.across} across"
                   + (f", OMP_NUM_THREADS={env_note}" if env_note else ""), flush=True)
             with concurrent.futures.ThreadPoolExecutor(a.jobs) as pool:
                 futs = {pool.submit(run_one, r, d, a.vesph): (r, d) for r, d in todo}
@@ -481,13 +498,13 @@ def main(argv=None):
                 status = 1
                 continue
             rows.append(row)
-        csv_path = os.path.join(sd, study + ".csv")
+        csv_path = os.path.join(sd, name + ".csv")
         with open(csv_path, "w", newline="") as fh:
             w = csv.writer(fh)
             w.writerow(COLUMNS)
             for row in rows:
                 w.writerow([fmt(row.get(c)) for c in COLUMNS])
-        print(f"== {study} ({a.across} across)")
+        print(f"== {name} ({a.across} across)")
         print(f"   {'label':<28}{'De':>7}{'Re':>6}{'exit':>6}{'swell':>9}{'std':>8}"
               f"{'filled':>9}{'clust':>6}{'det':>5}  stable")
         for row in rows:
@@ -499,7 +516,7 @@ def main(argv=None):
                   + (f"   ({row['message']})" if row.get("message") else ""))
         print(f"wrote {csv_path}")
         if rows and not a.no_png:
-            png = os.path.join(sd, study + ".png")
+            png = os.path.join(sd, name + ".png")
             plot(study, rows, png)
             print(f"wrote {png}")
     return status

@@ -1930,6 +1930,27 @@ def make_die_swell_study_tests(tmp):
         expect(rc == 0 and out.count(" run ") == 4
                and os.path.exists(os.path.join(d, "procedures", "case4", "case4.toml")),
                f"--dry-run: exit {rc}", out + err)
+        # --scheme isph: every run of a study as ISPH, filed beside the WCSPH study; the ISPH
+        # scene is the wsph_isph study's (predictor projection, no-penetration walls,
+        # symmetric grad p in the right-hand side and the correction).
+        rc, out, err = tool("die_swell_study.py", "frontier", "--scheme", "isph", "--dry-run",
+                            "--only", "re10_de1_leapfrog", "--out", d)
+        path = os.path.join(d, "frontier_isph", "re10_de1_leapfrog", "re10_de1_leapfrog.toml")
+        expect(rc == 0 and out.count(" run ") == 1 and os.path.exists(path),
+               f"--scheme isph --dry-run: exit {rc}", out + err)
+        if os.path.exists(path):
+            with open(path, "rb") as fh:
+                s = tomllib.load(fh)
+            expect(s["solver"] == {"scheme": "isph", "linear_solver": "umfpack",
+                                   "gradient": "symmetric", "carried_pressure": "predictor",
+                                   "wall_condition": "no_penetration"}
+                   and s["effects"]["pressure_gradient"]["form"] == "symmetric"
+                   and "equation_of_state" not in s["effects"]
+                   and s["integrator"]["type"] == "leapfrog",
+                   f"--scheme isph scene: {s.get('solver')}, {sorted(s['effects'])}")
+        rc, out, err = tool("die_swell_study.py", "wsph_isph", "--scheme", "isph", "--dry-run",
+                            "--out", d)
+        expect(rc == 2 and "already runs both" in err, f"--scheme isph wsph_isph: exit {rc}", err)
 
     def tabulation():
         # Two runs of the wsph_isph study with synthetic outputs: one finished (the synthetic
