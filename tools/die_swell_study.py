@@ -375,7 +375,7 @@ def short(v):
     return f"{v:.4g}" if isinstance(v, float) else fmt(v)
 
 
-def plot(study, rows, png):
+def plot(study, rows, png, title=None):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -418,7 +418,7 @@ def plot(study, rows, png):
         ax.set_xticks(range(len(rows)))
         ax.set_xticklabels(labels, rotation=30, ha="right")
         ax.set_ylabel("steady swell ratio (red: not stable)")
-    ax.set_title(f"die swell study: {study}")
+    ax.set_title(f"die swell study: {title or study}")
     ax.grid(alpha=0.3)
     fig.tight_layout()
     fig.savefig(png, dpi=120)
@@ -517,7 +517,7 @@ def main(argv=None):
         print(f"wrote {csv_path}")
         if rows and not a.no_png:
             png = os.path.join(sd, name + ".png")
-            plot(study, rows, png)
+            plot(study, rows, png, title=name)
             print(f"wrote {png}")
     return status
 
