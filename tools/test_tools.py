@@ -1931,8 +1931,8 @@ def make_die_swell_study_tests(tmp):
                and os.path.exists(os.path.join(d, "procedures", "case4", "case4.toml")),
                f"--dry-run: exit {rc}", out + err)
         # --scheme isph: every run of a study as ISPH, filed beside the WCSPH study; the ISPH
-        # scene is the wsph_isph study's (predictor projection, no-penetration walls,
-        # symmetric grad p in the right-hand side and the correction).
+        # scene is the wsph_isph study's (predictor projection, density relaxation, symmetric
+        # grad p in the right-hand side and the correction).
         rc, out, err = tool("die_swell_study.py", "frontier", "--scheme", "isph", "--dry-run",
                             "--only", "re10_de1_leapfrog", "--out", d)
         path = os.path.join(d, "frontier_isph", "re10_de1_leapfrog", "re10_de1_leapfrog.toml")
@@ -1943,7 +1943,7 @@ def make_die_swell_study_tests(tmp):
                 s = tomllib.load(fh)
             expect(s["solver"] == {"scheme": "isph", "linear_solver": "umfpack",
                                    "gradient": "symmetric", "carried_pressure": "predictor",
-                                   "wall_condition": "no_penetration"}
+                                   "density_relaxation": 0.1}
                    and s["effects"]["pressure_gradient"]["form"] == "symmetric"
                    and "equation_of_state" not in s["effects"]
                    and s["integrator"]["type"] == "leapfrog",

@@ -44,4 +44,18 @@ double Kernel::dWdr(double r) const {
   return visit([&](auto shape) { return dw_scale * shape.df(r / h); });
 }
 
+double Kernel::latticeSum(double dx) const {
+  const double support = supportRadius();
+  const int reach = static_cast<int>(std::ceil(support / dx));
+  const int kz = dim == 3 ? reach : 0;
+  double n = 0;
+  for (int i = -reach; i <= reach; ++i)
+    for (int j = -reach; j <= reach; ++j)
+      for (int k = -kz; k <= kz; ++k) {
+        const double r = dx * std::sqrt(static_cast<double>(i * i + j * j + k * k));
+        if (r < support) n += W(r);
+      }
+  return n;
+}
+
 }  // namespace vesph

@@ -75,26 +75,10 @@ class FreeSurface final : public Effect<D> {
     flag_ = &s.particles.fields.require("free_surface", 1, Field::Range::all);
     if (near_surface_) outermost_ = &s.particles.fields.require("free_surface_outermost", 1, Field::Range::moving);
     // n_ref: the lattice sum of W over a full support, spacing dx, the particle itself included.
-    const double support = s.kernel.supportRadius(), dx = s.spacing;
-    const int reach = static_cast<int>(std::ceil(support / dx));
-    double n = 0;
-    s.kernel.visit([&](auto shape) {
-      using Shape = decltype(shape);
-      std::array<int, D> k;
-      k.fill(-reach);
-      while (true) {
-        double r2 = 0;
-        for (int a = 0; a < D; ++a) r2 += (k[a] * dx) * (k[a] * dx);
-        const double r = std::sqrt(r2);
-        if (r < support) n += s.kernel.w_scale * Shape::f(r / s.kernel.h);
-        int a = 0;
-        while (a < D && ++k[a] > reach) k[a++] = -reach;
-        if (a == D) break;
-      }
-    });
+    const double n = s.kernel.latticeSum(s.spacing);
     limit_ = threshold_ * n;
     self_ = s.kernel.visit([&](auto shape) { return s.kernel.w_scale * decltype(shape)::f(0.0); });
-    scan_ = 0.5 * support;
+    scan_ = 0.5 * s.kernel.supportRadius();
   }
 
   void interact(const RhsContext<D>& ctx, Index i, std::span<const Neighbour<D>> moving,

@@ -100,6 +100,9 @@ struct Kernel {
   Kernel(KernelType type_, int dim_, double h_);
 
   double supportRadius() const { return support_q * h; }
+  // Sum of W over a full support of a square (cubic) lattice of spacing dx, the centre
+  // included: the number density of an undisturbed interior particle, 1/m^dim.
+  double latticeSum(double dx) const;
   double W(double r) const;
   double dWdr(double r) const;
 
