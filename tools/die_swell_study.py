@@ -20,7 +20,7 @@ Re = rho W v / mu with rho = 1000 kg/m^3, mu = 10 Pa s, W = 0.01 m; alpha2 = -0.
   procedures   §4.4.2: Case 1-4 at v = 3.4 m/s, alpha1 = -2.8e-3 (De = 0.0952)
   wsph_isph    §4.4.6: WCSPH and ISPH at v = 6.8 m/s, alpha1 = -4e-3 (thesis 1.362, 1.355);
                the ISPH scene: p = 0 on detected free surface, symmetric grad p (eq. 3.18),
-               predictor projection, density relaxation 0.1 (docs/user-guide.md [solver])
+               predictor projection, density relaxation over 0.32 ms (docs/user-guide.md [solver])
   frontier     beyond §4.4.5's limits (De 0.3 at Re 5, 0.5 at Re 10): Re = 10 with
                De = 0.75, 1.0, 1.5, 2.0 (leapfrog) and 1.0, 1.5 (adaptive ARKODE), Re = 5
                with De = 0.4, 1.0 (leapfrog) and 1.0 (ARKODE); and the Oldroyd-B fluid of
@@ -218,14 +218,15 @@ def scene_for(run, across):
         e["free_surface"] = {"threshold": 0.97}
         # The whole pressure solved each step from the velocity with the carried pressure force
         # taken out ("predictor"), the symmetric grad p (thesis eq. 3.18) in the right-hand side
-        # and in the velocity correction, and a tenth of the particles' number-density error
-        # relaxed per step by the source (density_relaxation): without it the approximate
+        # and in the velocity correction, and the particles' number-density error relaxed by
+        # the source over 0.32 ms (density_relaxation_time; a tenth per step of the 10-across
+        # die's 3.2e-5 s, and about the time the feed takes to move 1 mm): without it the approximate
         # projection lets the die's fluid pack 7-14 % closer than its lattice and flow 10 %
         # slower than the feed; with no-penetration walls instead the die's pressure runs in a
         # three-step cycle (docs/studies.md §5). With the incremental form the symmetric grad p
         # blows the die up at the exit within 3.5 ms.
         s["solver"] = {"scheme": "isph", "linear_solver": "umfpack", "gradient": "symmetric",
-                       "carried_pressure": "predictor", "density_relaxation": 0.1}
+                       "carried_pressure": "predictor", "density_relaxation_time": 3.2e-4}
     s["integrator"] = {"type": run.integrator}
     s["time"] = {"end": g6(0.045 * scale * run.duration)}
     s["output"] = {"interval": g6(0.002 * scale)}

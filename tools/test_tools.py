@@ -1943,7 +1943,7 @@ def make_die_swell_study_tests(tmp):
                 s = tomllib.load(fh)
             expect(s["solver"] == {"scheme": "isph", "linear_solver": "umfpack",
                                    "gradient": "symmetric", "carried_pressure": "predictor",
-                                   "density_relaxation": 0.1}
+                                   "density_relaxation_time": 3.2e-4}
                    and s["effects"]["pressure_gradient"]["form"] == "symmetric"
                    and "equation_of_state" not in s["effects"]
                    and s["integrator"]["type"] == "leapfrog",

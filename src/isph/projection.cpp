@@ -79,7 +79,8 @@ Projection<D>::Projection(ConfigTable& cfg) {
   gradient_ = g == "renormalised" ? Gradient::renormalised : g == "difference" ? Gradient::difference : Gradient::symmetric;
   predictor_ = cfg.choice("carried_pressure", "increment", {"increment", "predictor"}) == "predictor";
   no_penetration_ = cfg.choice("wall_condition", "hydrostatic", {"hydrostatic", "no_penetration"}) == "no_penetration";
-  density_relaxation_ = cfg.numberIn("density_relaxation", 0.0, 0.0, 1.0, "of the number-density error per step");
+  if (cfg.has("density_relaxation_time"))
+    density_relaxation_time_ = cfg.number("density_relaxation_time", std::nullopt, Bound::positive, "s");
   cleaning_ = cfg.boolean("divergence_cleaning", false);
   if (cleaning_) {
     // Direct solvers only: the matrix is near-singular (header), and conjugate gradients did
@@ -89,9 +90,9 @@ Projection<D>::Projection(ConfigTable& cfg) {
   } else {
     if (cfg.has("cleaning_solver")) cfg.fail("cleaning_solver", "only with divergence_cleaning = true");
   }
-  if (cleaning_ && density_relaxation_ > 0)
-    cfg.fail("density_relaxation", "0 with divergence_cleaning = true (the exact projection would remove the divergence "
-                                   "the relaxation asks for)");
+  if (cleaning_ && density_relaxation_time_ > 0)
+    cfg.fail("density_relaxation_time", "absent with divergence_cleaning = true (the exact projection would remove the "
+                                        "divergence the relaxation asks for)");
   solver_ = makeLinearSolver(options_);
 }
 
@@ -119,9 +120,9 @@ void Projection<D>::setup(Setup<D>& s) {
     throw InputError("solver.wall_condition = \"no_penetration\" is not implemented with the incremental form "
                      "(carried_pressure = \"increment\"): the push would be carried on into the next steps; use "
                      "carried_pressure = \"predictor\" (docs/theory.md §10)");
-  if (density_relaxation_ > 0) {
+  if (density_relaxation_time_ > 0) {
     if (!has_free_surface_)
-      throw InputError("solver.density_relaxation needs [effects.free_surface] (its number density is the "
+      throw InputError("solver.density_relaxation_time needs [effects.free_surface] (its number density is the "
                        "particles' spacing the term relaxes)");
     lattice_number_density_ = s.kernel.latticeSum(s.spacing);
   }
@@ -653,16 +654,19 @@ void Projection<D>::apply(SphSystem<D>& sys, double t, double dt, double* y) {
     }
   }
   wallsAndSource(sys, dt, !incremental_ || predictor_);
-  if (density_relaxation_ > 0) {
+  if (density_relaxation_time_ > 0) {
     // Density-invariant part of the source (Shao & Lo 2003; mixed with the divergence source as
-    // Asai et al. 2012): the projected velocity's divergence is made gamma (n_i/n_0 - 1)/dt
-    // instead of zero, so that a particle packed closer than the lattice (n_i > n_0, the
-    // number density at the positions the step reached) spreads and one spaced wider draws
-    // in, a fraction gamma of the error per step. The approximate projection alone keeps
-    // div v = 0 but lets the spacing drift (docs/studies.md §5: the ISPH die packs 7-14 %).
+    // Asai et al. 2012): the projected velocity's divergence is made (n_i/n_0 - 1)/tau instead
+    // of zero, so that a particle packed closer than the lattice (n_i > n_0, the number
+    // density at the positions the step reached) spreads and one spaced wider draws in, the
+    // error relaxing over tau; a step longer than tau removes it at most once (fraction
+    // min(1, dt/tau) per step). The rate is a time, not a fraction per step, so that the
+    // correction's velocity does not grow as 1/dt under a tiny step (ARKODE's first). The
+    // approximate projection alone keeps div v = 0 but lets the spacing drift
+    // (docs/studies.md §5: the ISPH die packs 7-14 %).
     const double* nd = sys.particles.fields.find("number_density")->data.data();
-    const double rate = density_relaxation_ / (lattice_number_density_ * dt);
-    const double shift = density_relaxation_ / dt;
+    const double fraction = std::min(1.0, dt / density_relaxation_time_);
+    const double rate = fraction / (lattice_number_density_ * dt), shift = fraction / dt;
     for (std::size_t i = 0; i < sys.particles.n_moving; ++i) divergence_[i] -= rate * nd[i] - shift;
   }
   assemble(sys, dt, operator_(), incremental_ && !predictor_, pressure_system_);
@@ -807,8 +811,8 @@ std::string Projection<D>::describe() const {
                       : predictor_  ? "carried pressure as the stages' predictor, the whole pressure solved every step"
                                     : "incremental form (the pressure increment solved every step)")
      << "; walls " << (no_penetration_ ? "no_penetration (stop the approach closer than dx/2)" : "hydrostatic (Adami)") << "\n";
-  if (density_relaxation_ > 0)
-    os << "#   density relaxation " << density_relaxation_ << ": the source targets div u = gamma (n/n0 - 1)/dt (Shao & Lo 2003)\n";
+  if (density_relaxation_time_ > 0)
+    os << "#   density relaxation over " << density_relaxation_time_ << " s: the source targets div u = (n/n0 - 1)/tau (Shao & Lo 2003)\n";
   if (cleaning_)
     os << "#   then divergence cleaning: the exact projection onto discretely divergence-free velocities ("
        << cleaning_solver_->name() << ")\n";

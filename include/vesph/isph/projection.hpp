@@ -67,10 +67,11 @@
 //      The incremental form starts from the pressure that makes the initial acceleration
 //      divergence-free (the same equation with v* the initial pressure-free acceleration and
 //      dt = 1): a fluid that starts at rest under gravity starts with its hydrostatic pressure.
-//      solver.density_relaxation = gamma > 0 (Shao & Lo 2003, mixed as Asai et al. 2012)
-//      subtracts gamma (n_i/n_0 - 1)/dt from div(v*)_i (any form): the corrected velocity's
-//      divergence is that target instead of zero, which spreads particles packed closer than
-//      the lattice (n_i, the free-surface effect's number density; n_0 the lattice's).
+//      solver.density_relaxation_time = tau (Shao & Lo 2003, mixed as Asai et al. 2012)
+//      subtracts f (n_i/n_0 - 1)/dt, f = min(1, dt/tau), from div(v*)_i (any form): the
+//      corrected velocity's divergence is that target instead of zero, which spreads particles
+//      packed closer than the lattice (n_i, the free-surface effect's number density; n_0 the
+//      lattice's) over the time tau.
 //   3. corrects velocities and positions of all fluid particles,
 //          v_i = v*_i - dt (G p)_i,  x_i = x_i - dt^2/2 (G p)_i   (incremental: G (p^{n+1} - p^n)),
 //      with G (solver.gradient) the renormalised difference form (default; Randles & Libersky
@@ -197,9 +198,9 @@ class Projection final : public StepHook<D> {
   Field* pressure_ = nullptr;
   Vec<D> g_ = Vec<D>::Zero();
   double rho0_ = 1;
-  // solver.density_relaxation (gamma) and the lattice's number density, 1/m^D, against which
-  // the free-surface effect's number density at the step's positions is compared.
-  double density_relaxation_ = 0, lattice_number_density_ = 1;
+  // solver.density_relaxation_time (tau, s; 0: off) and the lattice's number density, 1/m^D,
+  // against which the free-surface effect's number density at the step's positions is compared.
+  double density_relaxation_time_ = 0, lattice_number_density_ = 1;
   bool pinned_ = false, has_free_surface_ = false;
 
   // Unknowns: the fluid particles off the free surface (unknown_of_[i] = row or -1).
