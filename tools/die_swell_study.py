@@ -455,8 +455,8 @@ def main(argv=None):
     status = 0
     for study in a.studies:
         runs = study_runs(study)
-        for r in runs:
-            if a.scheme == "isph":
+        if a.scheme == "isph":
+            for r in runs:
                 r.scheme = "isph"
         if a.only:
             unknown = set(a.only) - {r.label for r in runs}
