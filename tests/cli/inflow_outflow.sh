@@ -35,6 +35,17 @@ for integ in leapfrog arkode; do
   $PY "$SRC/tools/inflow_check.py" "$WORK/isph-$integ/channel_inflow_outflow_isph.h5" >"$WORK/isph-$integ.log" 2>&1 && pass ||
     fail "isph, $integ: $(tail -5 "$WORK/isph-$integ.log")"
 done
+# The diagnostics of every hook fit in a row: the projection with the divergence cleaning (11
+# columns) beside the inflow/outflow (3) stopped the run ("too many diagnostics columns") until
+# the row held 16.
+expect 0 "ok: finished" -- "$VESPH" run "$I" -o "$WORK/isph-clean" --quiet --set time.end=0.01 --set solver.divergence_cleaning=true
+$PY - "$WORK/isph-clean/channel_inflow_outflow_isph.h5" <<'PYEOF' && pass || fail "isph with cleaning: diagnostics columns"
+import sys, h5py
+d = h5py.File(sys.argv[1], "r")["diagnostics"]
+need = {"cleaning_iterations", "divergence_projected", "released", "removed", "fluid_particles"}
+missing = need - set(d.keys())
+sys.exit(f"missing diagnostics columns: {sorted(missing)}" if missing else 0)
+PYEOF
 # scene errors
 expect 2 "inflow.mean_velocity: expected no mean_velocity with velocity = \"extrapolated\"" -- "$VESPH" check "$B" \
   --set 'inflow.mean_velocity=0.1'

@@ -19,7 +19,7 @@ namespace vesph {
 // One row per accepted step. `extra` holds the columns of post-step hooks (the ISPH
 // projection: solver iterations, residual, times, divergence), named by
 // FileAttributes::extra_columns; scenes without such a hook write none.
-inline constexpr std::size_t kMaxExtraDiagnostics = 12;
+inline constexpr std::size_t kMaxExtraDiagnostics = 16;  // ISPH with cleaning (11) + inflow/outflow (3) = 14
 struct DiagnosticsRow {
   double time, dt, kinetic_energy, mass, max_speed, max_density_deviation;
   std::array<double, kMaxExtraDiagnostics> extra{};
