@@ -9,6 +9,7 @@
 #include <limits>
 #include <sstream>
 
+#include "vesph/boundary/inflow_outflow.hpp"
 #include "vesph/core/renormalisation.hpp"
 
 #include "vesph/sim/system.hpp"
@@ -79,6 +80,7 @@ Projection<D>::Projection(ConfigTable& cfg) {
   gradient_ = g == "renormalised" ? Gradient::renormalised : g == "difference" ? Gradient::difference : Gradient::symmetric;
   predictor_ = cfg.choice("carried_pressure", "increment", {"increment", "predictor"}) == "predictor";
   no_penetration_ = cfg.choice("wall_condition", "hydrostatic", {"hydrostatic", "no_penetration"}) == "no_penetration";
+  velocity_inlet_ = cfg.choice("inlet_condition", "zero_gradient", {"zero_gradient", "velocity"}) == "velocity";
   if (cfg.has("density_relaxation_time"))
     density_relaxation_time_ = cfg.number("density_relaxation_time", std::nullopt, Bound::positive, "s");
   cleaning_ = cfg.boolean("divergence_cleaning", false);
@@ -116,6 +118,10 @@ void Projection<D>::setup(Setup<D>& s) {
   if (predictor_ && !incremental_)
     throw InputError("solver.carried_pressure = \"predictor\" needs [effects.pressure_gradient] (the pressure the "
                      "right-hand side carries); without it every projection solves for the whole pressure anyway");
+  if (velocity_inlet_ && incremental_ && !predictor_)
+    throw InputError("solver.inlet_condition = \"velocity\" is not implemented with the incremental form "
+                     "(carried_pressure = \"increment\"): the inlet's push would be carried on into the next steps; use "
+                     "carried_pressure = \"predictor\" (docs/theory.md §10)");
   if (no_penetration_ && incremental_ && !predictor_)
     throw InputError("solver.wall_condition = \"no_penetration\" is not implemented with the incremental form "
                      "(carried_pressure = \"increment\"): the push would be carried on into the next steps; use "
@@ -203,6 +209,8 @@ void Projection<D>::wallExtrapolation(const SphSystem<D>& sys, double dt) {
 #pragma omp parallel for schedule(static) if (N - n >= kParallelMinimum)
     for (std::size_t w = n; w < N; ++w) {
       double sumW = 0, offset = 0, push = 0;  // offset: hydrostatic; push: no_penetration
+      double inlet = 0;                       // inlet_condition = "velocity": the buffer's Neumann data
+      const bool buffer = inlet_velocity_data_ && P.kind[w] == static_cast<std::uint8_t>(ParticleKind::inflow);
       Vec<D> rij;
       double W, F;
       for (std::size_t k = list.start[w]; k < list.split[w]; ++k) {
@@ -210,6 +218,15 @@ void Projection<D>::wallExtrapolation(const SphSystem<D>& sys, double dt) {
         if (geo(shape, w, f, rij, W, F)) {
           wall_weight_[k] = W;
           sumW += W;
+          if (buffer) {
+            // The fluid's velocity along the flow relative to the buffer's: the pressure step
+            // rho0 (u_f - u_w).e (e . r_wf) / dt over f's makes -dt G p bring the rows next to
+            // the buffer to its speed (header, inlet_condition).
+            double ue = 0;
+            for (int a = 0; a < D; ++a) ue += (v[D * f + a] - v[D * w + a]) * inflow_direction_[a];
+            inlet += rho0_ * ue * inflow_direction_.dot(rij) * W;
+            continue;
+          }
           if (!no_penetration_) {
             offset += rho_g.dot(rij) * W;  // rij = r_w - r_f
           } else {
@@ -232,13 +249,13 @@ void Projection<D>::wallExtrapolation(const SphSystem<D>& sys, double dt) {
       // Without no_penetration: the hydrostatic part (Adami et al. eq. 27). With it, the push
       // alone: the velocity it answers (v* of the plain form, v** of the predictor form)
       // carries dt g, so the hydrostatic part is in it.
-      wall_offset_[w - n] = no_penetration_ ? push * inv / dt : offset * inv;
+      wall_offset_[w - n] = buffer ? inlet * inv / dt : no_penetration_ ? push * inv / dt : offset * inv;
     }
   });
 }
 
 template <int D>
-void Projection<D>::wallsAndSource(SphSystem<D>& sys, double dt, bool whole_pressure) {
+void Projection<D>::wallsAndSource(SphSystem<D>& sys, double dt, bool whole_pressure, bool inlet_data) {
   // The walls' Neumann data and the source divergence of the velocity in P.velocity (header,
   // step 2). Solving for the whole pressure (plain and predictor forms, the initial pressure),
   // the hydrostatic wall offsets answer the body force's share dt g of that velocity, so the
@@ -247,11 +264,25 @@ void Projection<D>::wallsAndSource(SphSystem<D>& sys, double dt, bool whole_pres
   // computed for the report). no_penetration: the normal velocity is in the wall offsets and
   // the walls' normal flux leaves the source.
   if (no_penetration_) wallNormals(sys);
+  // The inlet's velocity data in the steps' solves only (inlet_data): the initial solve
+  // (start) has an acceleration, not a velocity, in P.velocity.
+  inlet_velocity_data_ = velocity_inlet_ && inlet_data && findInflowDirection(sys);
   wallExtrapolation(sys, dt);
   if (no_penetration_)
     divergence(sys, Vec<D>::Zero(), true);
-  else if (whole_pressure)
+  else if (whole_pressure || inlet_velocity_data_)
     divergence(sys, Vec<D>(dt * g_));
+  inlet_velocity_data_ = false;
+}
+
+template <int D>
+bool Projection<D>::findInflowDirection(const SphSystem<D>& sys) {
+  for (const auto& h : sys.hooks)
+    if (const auto* flow = dynamic_cast<const InflowOutflow<D>*>(h.get()); flow && flow->hasBuffer()) {
+      inflow_direction_ = flow->flowDirection();
+      return true;
+    }
+  return false;
 }
 
 template <int D>
@@ -276,6 +307,10 @@ double Projection<D>::divergence(SphSystem<D>& sys, const Vec<D>& wall_shift, bo
                                // no_penetration: the normal flux into the wall is the walls'
                                // Neumann data (wallExtrapolation), not a source
                                if (tangential_walls) u -= u.dot(wall_normal_[i]) * wall_normal_[i];
+                               // inlet_condition = "velocity": the flux along the flow through
+                               // the buffer is the buffer's Neumann data (wallExtrapolation)
+                               if (inlet_velocity_data_ && P.kind[nb.j] == static_cast<std::uint8_t>(ParticleKind::inflow))
+                                 u -= u.dot(inflow_direction_) * inflow_direction_;
                                acc += m[nb.j] * u.dot(nb.rij) * nb.F;
                              }
                              divergence_[i] = -acc / rho[i];
@@ -616,7 +651,7 @@ void Projection<D>::start(SphSystem<D>& sys, double t, double* y) {
   // As in the plain form (there is no previous pressure whose wall offsets would cancel the
   // hydrostatic ones); with no_penetration the "velocity" is the acceleration over dt = 1 here,
   // against which the gaps, in metres, are negligible.
-  wallsAndSource(sys, 1.0, true);
+  wallsAndSource(sys, 1.0, true, false);
   gradientRows(sys, gradient_, true);
   assemble(sys, 1.0, operator_(), incremental_, pressure_system_);
   solution_.setZero(static_cast<Eigen::Index>(n_unknowns_));
@@ -653,7 +688,7 @@ void Projection<D>::apply(SphSystem<D>& sys, double t, double dt, double* y) {
       for (int c = 0; c < D; ++c) v[D * k + c] += dt * a[c];
     }
   }
-  wallsAndSource(sys, dt, !incremental_ || predictor_);
+  wallsAndSource(sys, dt, !incremental_ || predictor_, true);
   if (density_relaxation_time_ > 0) {
     // Density-invariant part of the source (Shao & Lo 2003; mixed with the divergence source as
     // Asai et al. 2012): the projected velocity's divergence is made (n_i/n_0 - 1)/tau instead
@@ -811,6 +846,8 @@ std::string Projection<D>::describe() const {
                       : predictor_  ? "carried pressure as the stages' predictor, the whole pressure solved every step"
                                     : "incremental form (the pressure increment solved every step)")
      << "; walls " << (no_penetration_ ? "no_penetration (stop the approach closer than dx/2)" : "hydrostatic (Adami)") << "\n";
+  if (velocity_inlet_)
+    os << "#   inflow buffer as a velocity inlet: dp/dn = rho (u - u_w).e/dt there (inlet_condition = \"velocity\")\n";
   if (density_relaxation_time_ > 0)
     os << "#   density relaxation over " << density_relaxation_time_ << " s: the source targets div u = (n/n0 - 1)/tau (Shao & Lo 2003)\n";
   if (cleaning_)

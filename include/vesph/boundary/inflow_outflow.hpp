@@ -72,6 +72,13 @@ class InflowOutflow final : public StepHook<D> {
   void restoreCarried(const ArrayLookup& find) override;
 
   bool extrapolatedVelocity() const { return extrapolated_; }
+  bool hasBuffer() const { return !buffer_.empty(); }
+  // The inflow's direction e (a signed coordinate unit vector).
+  Vec<D> flowDirection() const {
+    Vec<D> e = Vec<D>::Zero();
+    e[axis_] = sign_;
+    return e;
+  }
   // The largest prescribed buffer speed (1.5 U for the parabola, U uniform), m/s; 0 without
   // a prescribed inflow.
   double prescribedPeakSpeed() const {

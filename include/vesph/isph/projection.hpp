@@ -45,6 +45,13 @@
 //      the normal flux into the walls then leaves the source divergence (it is these Neumann
 //      data, not a volume source). A fluid at rest under gravity gets u . n = dt g . n and the
 //      hydrostatic wall pressure as before.
+//      A prescribed inflow buffer (kind inflow) is such a wall without the body-force term
+//      (zero-gradient data); with solver.inlet_condition = "velocity" (plain and predictor
+//      forms) its particles take
+//          p_w = sum_f c_wf p_f + rho0 sum_f c_wf ((u_f - u_w) . e)(e . r_wf) / dt,
+//      e the flow direction: grad p . e = rho (u - u_w) . e / dt, push and pull, so that the
+//      correction brings the rows next to the buffer to its speed; the flux along e through the
+//      buffer then leaves the source divergence (docs/theory.md §10, the velocity inlet).
 //      Incremental form (Goda 1979; van Kan 1986), when the scene lists
 //      [effects.pressure_gradient]: the right-hand side then carries the last projection's
 //      pressure p^n through the step (best with form = "renormalised", the gradient below), so
@@ -155,7 +162,7 @@ class Projection final : public StepHook<D> {
   void numberUnknowns(const SphSystem<D>& sys);
   void wallExtrapolation(const SphSystem<D>& sys, double dt);
   void wallNormals(SphSystem<D>& sys);
-  void wallsAndSource(SphSystem<D>& sys, double dt, bool whole_pressure);
+  void wallsAndSource(SphSystem<D>& sys, double dt, bool whole_pressure, bool inlet_data);
   // One assembled matrix with the record of its sparsity pattern (the direct solvers keep their
   // symbolic analysis while it holds): the pressure equation's, and the cleaning's.
   struct Assembled {
@@ -182,6 +189,11 @@ class Projection final : public StepHook<D> {
   // velocity (header, step 2) instead of the hydrostatic balance alone; solver.carried_pressure
   // = "predictor": the whole pressure solved every step (header, incremental form).
   bool no_penetration_ = false, predictor_ = false;
+  // solver.inlet_condition = "velocity": the inflow buffer's pressure carries the Neumann data
+  // of its velocity (inflow_direction_ = e, the flow direction); set during a step's solve only.
+  bool velocity_inlet_ = false, inlet_velocity_data_ = false;
+  Vec<D> inflow_direction_ = Vec<D>::Zero();
+  bool findInflowDirection(const SphSystem<D>& sys);
   std::vector<Vec<D>> wall_normal_;     // per moving particle: unit normal away from the walls (0: none near)
   std::vector<double> wall_gap_;        // per moving particle: the approach left before the rest distance, m
   LinearSolverOptions cleaning_options_;
