@@ -222,9 +222,12 @@ void Projection<D>::wallExtrapolation(const SphSystem<D>& sys, double dt) {
             // The fluid's velocity along the flow relative to the buffer's: the pressure step
             // rho0 (u_f - u_w).e (e . r_wf) / dt over f's makes -dt G p bring the rows next to
             // the buffer to its speed (header, inlet_condition).
+            // Across the flow the buffer is a hydrostatic wall (the source shifts it by dt g like
+            // the walls); along e the body force's share dt g.e is in u_f already.
             double ue = 0;
             for (int a = 0; a < D; ++a) ue += (v[D * f + a] - v[D * w + a]) * inflow_direction_[a];
             inlet += rho0_ * ue * inflow_direction_.dot(rij) * W;
+            offset += (rho_g - rho_g.dot(inflow_direction_) * inflow_direction_).dot(rij) * W;
             continue;
           }
           if (!no_penetration_) {
@@ -249,7 +252,7 @@ void Projection<D>::wallExtrapolation(const SphSystem<D>& sys, double dt) {
       // Without no_penetration: the hydrostatic part (Adami et al. eq. 27). With it, the push
       // alone: the velocity it answers (v* of the plain form, v** of the predictor form)
       // carries dt g, so the hydrostatic part is in it.
-      wall_offset_[w - n] = buffer ? inlet * inv / dt : no_penetration_ ? push * inv / dt : offset * inv;
+      wall_offset_[w - n] = buffer ? (inlet / dt + offset) * inv : no_penetration_ ? push * inv / dt : offset * inv;
     }
   });
 }

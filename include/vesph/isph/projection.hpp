@@ -50,8 +50,9 @@
 //      forms) its particles take
 //          p_w = sum_f c_wf p_f + rho0 sum_f c_wf ((u_f - u_w) . e)(e . r_wf) / dt,
 //      e the flow direction: grad p . e = rho (u - u_w) . e / dt, push and pull, so that the
-//      correction brings the rows next to the buffer to its speed; the flux along e through the
-//      buffer then leaves the source divergence (docs/theory.md §10, the velocity inlet).
+//      correction brings the rows next to the buffer to its speed, plus the walls' hydrostatic
+//      term across the flow, rho0 (g - (g.e) e) . r_wf; the flux along e through the buffer then
+//      leaves the source divergence (docs/theory.md §10, the velocity inlet).
 //      Incremental form (Goda 1979; van Kan 1986), when the scene lists
 //      [effects.pressure_gradient]: the right-hand side then carries the last projection's
 //      pressure p^n through the step (best with form = "renormalised", the gradient below), so
