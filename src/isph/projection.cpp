@@ -196,7 +196,7 @@ void Projection<D>::wallNormals(SphSystem<D>& sys) {
 }
 
 template <int D>
-void Projection<D>::wallExtrapolation(const SphSystem<D>& sys, double dt) {
+void Projection<D>::wallExtrapolation(const SphSystem<D>& sys, double dt, bool inlet_data) {
   const ParticleSet<D>& P = sys.particles;
   const NeighbourList<D>& list = sys.neighbours;
   const std::size_t n = P.n_moving, N = P.size();
@@ -204,13 +204,16 @@ void Projection<D>::wallExtrapolation(const SphSystem<D>& sys, double dt) {
   wall_offset_.assign(N - n, 0.0);
   const CandidateGeometry<D> geo = candidateGeometry(sys);
   const Vec<D> rho_g = rho0_ * g_;
+  // inlet_data: across the flow the buffer is a hydrostatic wall (the source shifts it by dt g
+  // like the walls); along e the body force's share dt g.e is in u_f already.
+  const Vec<D> rho_g_across = rho_g - rho_g.dot(inflow_direction_) * inflow_direction_;
   const double* v = P.velocity.data();
   sys.kernel.visit([&](auto shape) {
 #pragma omp parallel for schedule(static) if (N - n >= kParallelMinimum)
     for (std::size_t w = n; w < N; ++w) {
       double sumW = 0, offset = 0, push = 0;  // offset: hydrostatic; push: no_penetration
       double inlet = 0;                       // inlet_condition = "velocity": the buffer's Neumann data
-      const bool buffer = inlet_velocity_data_ && P.kind[w] == static_cast<std::uint8_t>(ParticleKind::inflow);
+      const bool buffer = inlet_data && P.kind[w] == static_cast<std::uint8_t>(ParticleKind::inflow);
       Vec<D> rij;
       double W, F;
       for (std::size_t k = list.start[w]; k < list.split[w]; ++k) {
@@ -222,12 +225,10 @@ void Projection<D>::wallExtrapolation(const SphSystem<D>& sys, double dt) {
             // The fluid's velocity along the flow relative to the buffer's: the pressure step
             // rho0 (u_f - u_w).e (e . r_wf) / dt over f's makes -dt G p bring the rows next to
             // the buffer to its speed (header, inlet_condition).
-            // Across the flow the buffer is a hydrostatic wall (the source shifts it by dt g like
-            // the walls); along e the body force's share dt g.e is in u_f already.
             double ue = 0;
             for (int a = 0; a < D; ++a) ue += (v[D * f + a] - v[D * w + a]) * inflow_direction_[a];
             inlet += rho0_ * ue * inflow_direction_.dot(rij) * W;
-            offset += (rho_g - rho_g.dot(inflow_direction_) * inflow_direction_).dot(rij) * W;
+            offset += rho_g_across.dot(rij) * W;
             continue;
           }
           if (!no_penetration_) {
@@ -268,28 +269,25 @@ void Projection<D>::wallsAndSource(SphSystem<D>& sys, double dt, bool whole_pres
   // the walls' normal flux leaves the source.
   if (no_penetration_) wallNormals(sys);
   // The inlet's velocity data in the steps' solves only (inlet_data): the initial solve
-  // (start) has an acceleration, not a velocity, in P.velocity.
-  inlet_velocity_data_ = velocity_inlet_ && inlet_data && findInflowDirection(sys);
-  wallExtrapolation(sys, dt);
+  // (start) has an acceleration, not a velocity, in P.velocity. (inlet_condition = "velocity"
+  // is refused with the incremental form, so those solves are for the whole pressure.)
+  const bool inlet = velocity_inlet_ && inlet_data;
+  if (inlet && inflow_direction_.isZero()) {
+    // The scene has a prescribed inflow buffer (checked at setup, src/sim/simulation.cpp); its
+    // direction does not change.
+    for (const auto& h : sys.hooks)
+      if (const auto* flow = dynamic_cast<const InflowOutflow<D>*>(h.get()); flow && flow->hasBuffer())
+        inflow_direction_ = flow->flowDirection();
+  }
+  wallExtrapolation(sys, dt, inlet);
   if (no_penetration_)
-    divergence(sys, Vec<D>::Zero(), true);
-  else if (whole_pressure || inlet_velocity_data_)
-    divergence(sys, Vec<D>(dt * g_));
-  inlet_velocity_data_ = false;
+    divergence(sys, Vec<D>::Zero(), true, inlet);
+  else if (whole_pressure)
+    divergence(sys, Vec<D>(dt * g_), false, inlet);
 }
 
 template <int D>
-bool Projection<D>::findInflowDirection(const SphSystem<D>& sys) {
-  for (const auto& h : sys.hooks)
-    if (const auto* flow = dynamic_cast<const InflowOutflow<D>*>(h.get()); flow && flow->hasBuffer()) {
-      inflow_direction_ = flow->flowDirection();
-      return true;
-    }
-  return false;
-}
-
-template <int D>
-double Projection<D>::divergence(SphSystem<D>& sys, const Vec<D>& wall_shift, bool tangential_walls) {
+double Projection<D>::divergence(SphSystem<D>& sys, const Vec<D>& wall_shift, bool tangential_walls, bool inlet_data) {
   const ParticleSet<D>& P = sys.particles;
   const std::size_t n = P.n_moving;
   divergence_.resize(n);
@@ -312,7 +310,7 @@ double Projection<D>::divergence(SphSystem<D>& sys, const Vec<D>& wall_shift, bo
                                if (tangential_walls) u -= u.dot(wall_normal_[i]) * wall_normal_[i];
                                // inlet_condition = "velocity": the flux along the flow through
                                // the buffer is the buffer's Neumann data (wallExtrapolation)
-                               if (inlet_velocity_data_ && P.kind[nb.j] == static_cast<std::uint8_t>(ParticleKind::inflow))
+                               if (inlet_data && P.kind[nb.j] == static_cast<std::uint8_t>(ParticleKind::inflow))
                                  u -= u.dot(inflow_direction_) * inflow_direction_;
                                acc += m[nb.j] * u.dot(nb.rij) * nb.F;
                              }

@@ -117,7 +117,7 @@ Simulation<D>::Simulation(Config& config, const SceneHeader& header) : config_(c
     if (flow && std::none_of(system_.effects.begin(), system_.effects.end(), [](const auto& e) { return e->name() == "free_surface"; }))
       throw InputError(config_.file() + ": inflow/outflow with solver.scheme = \"isph\" need [effects.free_surface] "
                        "(threshold = 0.97): the open ends are free surfaces with p = 0");
-    if (!flow && solver.has("inlet_condition"))
+    if ((!flow || !flow->hasBuffer()) && solver.has("inlet_condition"))
       solver.fail("inlet_condition", "only with a prescribed [inflow] (the condition is the buffer's)");
     system_.hooks.push_back(makeProjection<D>(solver));
   } else {

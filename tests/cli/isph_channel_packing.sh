@@ -65,4 +65,7 @@ expect 2 "inlet_condition = .velocity. is not implemented with the incremental f
   "$SRC/cases/channel_inflow_outflow_isph.toml" --set 'solver.inlet_condition="velocity"'
 expect 2 "solver.inlet_condition: expected only with a prescribed \[inflow\]" -- "$VESPH" check \
   "$SRC/cases/hydrostatic_tank_isph.toml" --set 'solver.inlet_condition="velocity"'
+sed '/^\[inflow\]/,/^\[outflow\]/{/^\[outflow\]/!d}' "$SRC/cases/channel_inflow_outflow_isph.toml" >"$WORK/outflow_only.toml"
+expect 2 "solver.inlet_condition: expected only with a prescribed \[inflow\]" -- "$VESPH" check "$WORK/outflow_only.toml" \
+  --set 'solver.carried_pressure="predictor"' --set 'solver.inlet_condition="velocity"'
 finish

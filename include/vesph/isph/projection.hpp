@@ -161,7 +161,9 @@ class Projection final : public StepHook<D> {
   };
   void flagFreeSurface(SphSystem<D>& sys, double t);
   void numberUnknowns(const SphSystem<D>& sys);
-  void wallExtrapolation(const SphSystem<D>& sys, double dt);
+  // inlet_data (wallExtrapolation, wallsAndSource, divergence): the inflow buffer as a velocity
+  // inlet (solver.inlet_condition = "velocity") in this solve.
+  void wallExtrapolation(const SphSystem<D>& sys, double dt, bool inlet_data);
   void wallNormals(SphSystem<D>& sys);
   void wallsAndSource(SphSystem<D>& sys, double dt, bool whole_pressure, bool inlet_data);
   // One assembled matrix with the record of its sparsity pattern (the direct solvers keep their
@@ -178,7 +180,8 @@ class Projection final : public StepHook<D> {
   void assemble(SphSystem<D>& sys, double dt, Laplacian op, bool incremental, Assembled& out);
   Laplacian operator_() const { return consistent_ ? Laplacian::consistent : Laplacian::morris; }
   void clean(SphSystem<D>& sys, double t, double dt, double* y);
-  double divergence(SphSystem<D>& sys, const Vec<D>& wall_shift, bool tangential_walls = false);
+  double divergence(SphSystem<D>& sys, const Vec<D>& wall_shift, bool tangential_walls = false,
+                    bool inlet_data = false);
   void correct(SphSystem<D>& sys, double dt, double* y, bool cleaning);
   void correctPositions(SphSystem<D>& sys, double dt, double* y);
   void storePressure(const SphSystem<D>& sys);
@@ -191,10 +194,10 @@ class Projection final : public StepHook<D> {
   // = "predictor": the whole pressure solved every step (header, incremental form).
   bool no_penetration_ = false, predictor_ = false;
   // solver.inlet_condition = "velocity": the inflow buffer's pressure carries the Neumann data
-  // of its velocity (inflow_direction_ = e, the flow direction); set during a step's solve only.
-  bool velocity_inlet_ = false, inlet_velocity_data_ = false;
+  // of its velocity (inflow_direction_ = e, the flow direction, taken from the inflow hook at
+  // the first step's solve).
+  bool velocity_inlet_ = false;
   Vec<D> inflow_direction_ = Vec<D>::Zero();
-  bool findInflowDirection(const SphSystem<D>& sys);
   std::vector<Vec<D>> wall_normal_;     // per moving particle: unit normal away from the walls (0: none near)
   std::vector<double> wall_gap_;        // per moving particle: the approach left before the rest distance, m
   LinearSolverOptions cleaning_options_;
