@@ -45,8 +45,8 @@
 //      the normal flux into the walls then leaves the source divergence (it is these Neumann
 //      data, not a volume source). A fluid at rest under gravity gets u . n = dt g . n and the
 //      hydrostatic wall pressure as before.
-//      A prescribed inflow buffer (kind inflow) is such a wall without the body-force term
-//      (zero-gradient data); with solver.inlet_condition = "velocity" (plain and predictor
+//      A prescribed inflow buffer (kind inflow) is such a wall (hydrostatic data: zero gradient
+//      without gravity); with solver.inlet_condition = "velocity" (plain and predictor
 //      forms) its particles take
 //          p_w = sum_f c_wf p_f + rho0 sum_f c_wf ((u_f - u_w) . e)(e . r_wf) / dt,
 //      e the flow direction: grad p . e = rho (u - u_w) . e / dt, push and pull, so that the
