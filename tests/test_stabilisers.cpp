@@ -922,3 +922,165 @@ TEST_CASE("image walls (Fang et al. 2006 eqs. 46-48): boundary and image values 
       CHECK(worst_image_v > 0.05);   // eq. 47 with the literal d_P: the interpolation bias
   }
 }
+
+// ---------------------------------------------------------------------------------------------
+// Particle shifting (src/physics/particle_shifting.cpp): du_i = -A h U grad C_i added to dx/dt,
+// the fields carried with (du . grad) phi, tangential only in the free-surface band.
+
+TEST_CASE("particle shifting: a lattice is left alone, a displaced particle is pushed back, keys checked") {
+  const double dx = 0.01, A = 2.0, U = 0.5;
+  const std::string keys = "[effects.particle_shifting]\ncoefficient = 2.0\nspeed = 0.5\n";
+  Box<2> b(keys, dx, 1.6, KernelType::quintic, 20 * dx, true);
+  b.lattice(20, [](const Vec<2>&) { return Vec<2>::Zero(); });
+  const std::size_t k = 10 * 20 + 10;
+  const Vec<2> d(0.2 * dx, -0.1 * dx);
+  b.finish();
+  b.evaluate();
+  double worst = 0;
+  for (std::size_t i = 0; i < b.n(); ++i) worst = std::max(worst, b.dxdt(i).norm());
+  CHECK(worst < 1e-12 * U);  // grad C = 0 on the regular lattice
+  b.sys.particles.x(k) += d;
+  b.evaluate();
+  // By hand: grad C_k = sum_j V [1 + 0.2 (W/W(dx))^4] F r_kj over the lattice around the
+  // displaced particle (r_kj = x_k - x_j), du_k = -A h U grad C_k.
+  const Kernel& K = b.sys.kernel;
+  Vec<2> gradC = Vec<2>::Zero();
+  for (int i = -6; i <= 6; ++i)
+    for (int j = -6; j <= 6; ++j) {
+      if (!i && !j) continue;
+      const Vec<2> r = d - dx * Vec<2>(i, j);
+      const double q = r.norm();
+      if (q >= K.supportRadius()) continue;
+      gradC += dx * dx * (1 + 0.2 * std::pow(K.W(q) / K.W(dx), 4)) * K.dWdr(q) / q * r;
+    }
+  const Vec<2> expect = -A * K.h * U * gradC;
+  MESSAGE("displaced by ", d.transpose(), ": dx_k/dt = ", b.dxdt(k).transpose(), ", by hand ", expect.transpose());
+  CHECK((b.dxdt(k) - expect).norm() < 1e-10 * expect.norm());
+  CHECK(b.dxdt(k).dot(d) < -0.95 * b.dxdt(k).norm() * d.norm());  // back towards its site
+  CHECK(b.dvdt(k).norm() == 0.0);                                    // at rest: nothing to carry
+
+  Config missing = Config::fromString("[effects.particle_shifting]\ncoefficient = 2.0\n", "test");
+  ConfigTable eff = missing.root().table("effects");
+  CHECK_THROWS_WITH_AS(makeEffects<2>(eff), doctest::Contains("speed"), InputError);
+}
+
+TEST_CASE("particle shifting: velocity, density and stress carried by (du . grad) phi") {
+  // Linear fields on a jittered lattice, checked on the interior particles (support full):
+  // v = G x with G = [[0, a], [b, 0]], rho = rho0 (1 + c x), S = (s x, 0, s y). The difference
+  // gradient of a linear field g.x is M_i g (M_i = -sum_j V_j F r_ij r_ij^T, computed here by
+  // brute force over the particles), so the carried rates are d v/dt = G M_i du,
+  // d rho/dt = rho0 c e_x . M_i du, dS/dt = (s e_x . M_i du, 0, s e_y . M_i du), to round-off.
+  const double dx = 0.01, a = 3.0, bb = -2.0, c = 0.5, s = 100.0;
+  Box<2> b("[effects.particle_shifting]\nspeed = 1.0\n[effects.velocity_gradient]\n[effects.oldroyd_b]\n"
+           "relaxation_time = 0.1\npolymer_viscosity = 1.0\n",
+           dx, 1.6, KernelType::quintic, 40 * dx, false);
+  b.lattice(24, [&](const Vec<2>& x) { return Vec<2>(a * x[1], bb * x[0]); });
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  ParticleSet<2>& p = b.sys.particles;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    for (int q = 0; q < 2; ++q) p.position[2 * i + q] += 0.15 * dx * u(rng);
+    p.v(i) = Vec<2>(a * p.x(i)[1], bb * p.x(i)[0]);
+    p.density[i] = kRho0 * (1 + c * p.x(i)[0]);
+  }
+  b.finish();
+  Field* S = p.fields.find("elastic_stress");
+  REQUIRE(S != nullptr);
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    S->at(i)[0] = s * p.x(i)[0];
+    S->at(i)[1] = 0.0;
+    S->at(i)[2] = s * p.x(i)[1];
+  }
+  b.sys.pack(b.y.data());
+  std::vector<double> with(b.y.size());
+  b.sys.evaluate(0.0, b.y.data(), with.data());
+  // The same without the shifting: the carried rates are the difference.
+  Box<2> r("[effects.velocity_gradient]\n[effects.oldroyd_b]\nrelaxation_time = 0.1\npolymer_viscosity = 1.0\n",
+           dx, 1.6, KernelType::quintic, 40 * dx, false);
+  r.lattice(24, [](const Vec<2>&) { return Vec<2>::Zero(); });
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    r.sys.particles.x(i) = p.x(i);
+    r.sys.particles.v(i) = p.v(i);
+    r.sys.particles.density[i] = p.density[i];
+  }
+  r.finish();
+  Field* Sr = r.sys.particles.fields.find("elastic_stress");
+  for (std::size_t i = 0; i < p.size(); ++i)
+    for (int q = 0; q < 3; ++q) Sr->at(i)[q] = S->at(i)[q];
+  r.sys.pack(r.y.data());
+  std::vector<double> without(r.y.size());
+  r.sys.evaluate(0.0, r.y.data(), without.data());
+  const std::size_t n = b.n();
+  const double lo = 0.5 * dx + 4 * dx, hi = 23.5 * dx - 4 * dx;
+  double err_v = 0, err_rho = 0, err_s = 0, scale = 0, deviation = 0;
+  int interior = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec<2> x = p.x(i);
+    if (x[0] < lo || x[0] > hi || x[1] < lo || x[1] > hi) continue;
+    ++interior;
+    const Vec<2> du0(with[2 * i] - without[2 * i], with[2 * i + 1] - without[2 * i + 1]);
+    scale = std::max(scale, du0.norm());
+    Eigen::Matrix2d M = Eigen::Matrix2d::Zero();
+    for (std::size_t j = 0; j < p.size(); ++j) {
+      const Vec<2> rij = x - p.x(j);
+      const double q = rij.norm();
+      if (j == i || q >= b.sys.kernel.supportRadius()) continue;
+      M -= p.mass[j] / p.density[j] * b.sys.kernel.dWdr(q) / q * rij * rij.transpose();
+    }
+    deviation = std::max(deviation, (M - Eigen::Matrix2d::Identity()).norm());
+    const Vec<2> du = M * du0;  // what the difference gradients see
+    const Vec<2> dv(with[3 * n + 2 * i] - without[3 * n + 2 * i], with[3 * n + 2 * i + 1] - without[3 * n + 2 * i + 1]);
+    err_v = std::max(err_v, (dv - Vec<2>(a * du[1], bb * du[0])).norm() / (std::abs(a) * du.norm()));
+    err_rho = std::max(err_rho, std::abs((with[2 * n + i] - without[2 * n + i]) - kRho0 * c * du[0]) / (kRho0 * c * du.norm()));
+    const double* ds = with.data() + 5 * n + 3 * i;
+    const double* ds0 = without.data() + 5 * n + 3 * i;
+    err_s = std::max(err_s, std::abs((ds[0] - ds0[0]) - s * du[0]) / (s * du.norm()) +
+                                std::abs(ds[1] - ds0[1]) / (s * du.norm()) +
+                                std::abs((ds[2] - ds0[2]) - s * du[1]) / (s * du.norm()));
+  }
+  MESSAGE(interior, " interior particles, |du| up to ", scale, " m/s, |M - I| up to ", deviation,
+          "; relative errors: v ", err_v, ", rho ", err_rho, ", S ", err_s);
+  CHECK(interior > 150);
+  CHECK(scale > 1e-4);       // the jitter gives a shift to carry the fields with
+  CHECK(deviation > 1e-2);   // and M differs from I: the check sees which gradient is used
+  CHECK(err_v < 1e-9);
+  CHECK(err_rho < 1e-9);
+  CHECK(err_s < 1e-9);
+}
+
+TEST_CASE("particle shifting: the free-surface band keeps only the tangential shift") {
+  // A block at rest, 24 x 12 particles, no walls: the rows under its top and bottom have a
+  // truncated support, so grad C points into the block. Without [effects.free_surface] they
+  // are shifted outward; with it (the band: flagged particles and their neighbours) the
+  // flat surfaces' shift, normal to them, is removed. Deep inside: no shift either way.
+  const double dx = 0.01;
+  double outward[2], band_normal[2], deep[2];
+  for (int fs = 0; fs < 2; ++fs) {
+    const std::string keys = std::string("[effects.particle_shifting]\nspeed = 1.0\n") +
+                             (fs ? "[effects.free_surface]\nthreshold = 0.97\n" : "");
+    Box<2> b(keys, dx, 1.6, KernelType::quintic, 40 * dx, false);
+    for (int i = 0; i < 24; ++i)
+      for (int j = 0; j < 12; ++j) b.add(Vec<2>((i + 0.5) * dx, (j + 0.5) * dx), Vec<2>::Zero(), kRho0, b.mass());
+    b.finish();
+    b.evaluate();
+    outward[fs] = 1e300;
+    band_normal[fs] = 0;
+    deep[fs] = 0;
+    for (std::size_t k = 0; k < b.n(); ++k) {
+      const Vec<2> x = b.sys.particles.x(k);
+      const bool middle = x[0] > 7 * dx && x[0] < 17 * dx;  // away from the sides
+      if (!middle) continue;
+      if (x[1] > 11 * dx) {  // the top row
+        outward[fs] = std::min(outward[fs], b.dxdt(k)[1]);
+        band_normal[fs] = std::max(band_normal[fs], std::abs(b.dxdt(k)[1]));
+      }
+      if (x[1] > 5 * dx && x[1] < 7 * dx && x[0] > 10 * dx && x[0] < 14 * dx) deep[fs] = std::max(deep[fs], b.dxdt(k).norm());
+    }
+  }
+  MESSAGE("top row dy/dt: without the band >= ", outward[0], " m/s, with it |.| <= ", band_normal[1],
+          "; deep inside |dx/dt| <= ", deep[0], " / ", deep[1]);
+  CHECK(outward[0] > 1e-3);          // pushed out of the block without the band
+  CHECK(band_normal[1] < 1e-12);     // flat surface: nothing tangential, the normal part removed
+  CHECK(deep[0] < 1e-12);
+  CHECK(deep[1] < 1e-12);
+}

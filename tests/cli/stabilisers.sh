@@ -1,4 +1,4 @@
-# The stabilisers (artificial_viscosity, xsph, artificial_stress) switched on in existing scenes
+# The stabilisers (artificial_viscosity, xsph, artificial_stress, particle_shifting) switched on in existing scenes
 # by --set: each runs a short Poiseuille channel to the end with valid output, the artificial
 # stress also the Oldroyd-B channel (elastic stress on fluid and wall particles); `check` prints
 # their defaults; bad keys and missing prerequisites exit 2 with a message naming the key.
@@ -19,13 +19,16 @@ run_ok xsph_normalised "$S" --set 'effects.xsph.form="normalised"'
 run_ok as "$S" --set 'effects.artificial_stress.epsilon=0.3' --set 'effects.equation_of_state.reference_pressure=-1e-5'
 run_ok all "$S" --set 'effects.artificial_viscosity={}' --set 'effects.xsph={}' --set 'effects.artificial_stress={}'
 run_ok as_oldroyd_b "$OB" --set 'effects.artificial_stress={}' --set 'effects.artificial_viscosity={}'
+run_ok shifting "$S" --set 'effects.particle_shifting.speed=0.01'
+run_ok shifting_oldroyd_b "$OB" --set 'effects.particle_shifting.speed=0.01' --set 'effects.particle_shifting.coefficient=1.0'
 
 # defaults shown by check
 expect 0 "artificial_viscosity = \{ alpha = 1.0, beta = 2.0 \}" -- "$VESPH" check "$S" --set 'effects.artificial_viscosity={}'
 expect 0 "artificial_stress = \{ epsilon = 0.2[0-9]*, exponent = 4 \}" -- "$VESPH" check "$S" --set 'effects.artificial_stress={}'
 expect 0 "xsph = \{ epsilon = 0.5, form = 'monaghan' \}" -- "$VESPH" check "$S" --set 'effects.xsph={}'
+expect 0 "coefficient = 2.0" -- "$VESPH" check "$S" --set 'effects.particle_shifting.speed=0.01'
 expect 0 "artificial_viscosity" -- "$VESPH" list
-for word in xsph artificial_stress; do
+for word in xsph artificial_stress particle_shifting; do
   grep -q "$word" "$WORK/out" && pass || fail "vesph list does not mention $word"
 done
 
@@ -39,6 +42,8 @@ expect 2 "effects.artificial_stress.epsilon: expected a number in \[0, 1\]" -- "
 expect 2 "effects.artificial_stress.exponent: expected an integer in \[1, 16\], got 0" -- "$VESPH" check "$S" --set effects.artificial_stress.exponent=0
 expect 2 "effects.artificial_stress.exponent: expected an integer" -- "$VESPH" check "$S" --set effects.artificial_stress.exponent=2.5
 expect 2 "W\(dx\) = 0" -- "$VESPH" check "$S" --set 'effects.artificial_stress={}' --set particles.smoothing_ratio=0.5 --set 'particles.kernel="cubic"'
+expect 2 "effects.particle_shifting.speed: expected a positive number \(this key is required\)" -- "$VESPH" check "$S" --set 'effects.particle_shifting={}'
+expect 2 "effects.particle_shifting.coefficient: expected a number in \[0, 100\]" -- "$VESPH" check "$S" --set effects.particle_shifting.speed=1 --set effects.particle_shifting.coefficient=-1
 # prerequisites: the sound speed and the pressure come from the equation of state
 grep -v '^\[effects.equation_of_state\]\|^sound_speed\|^\[effects.pressure_gradient\]' "$S" > "$WORK/noeos.toml"
 expect 2 "noeos.toml: effects.artificial_viscosity needs the sound speed.*add \[effects.equation_of_state\]" -- "$VESPH" check "$WORK/noeos.toml" --set 'effects.artificial_viscosity={}'
