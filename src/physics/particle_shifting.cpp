@@ -51,7 +51,7 @@ class ParticleShifting final : public PairEffect<D, ParticleShifting<D>> {
       : coefficient_(cfg.numberIn("coefficient", 2.0, 0.0, 100.0, "A of the shifting velocity -A h U grad C")),
         speed_(cfg.number("speed", std::nullopt, Bound::positive)),
         tensile_(cfg.numberIn("tensile_correction", 0.2, 0.0, 10.0, "R of Lind et al.'s 1 + R (W/W(dx))^n")),
-        exponent_(cfg.numberIn("exponent", 4.0, 0.0, 16.0, "n of Lind et al.'s 1 + R (W/W(dx))^n")) {}
+        exponent_(static_cast<int>(cfg.integer("exponent", 4, 1, 16))) {}
   std::string_view name() const override { return "particle_shifting"; }
   Phase phase() const override { return Phase::forces; }
   bool needsKernelValue() const override { return true; }
@@ -146,7 +146,9 @@ class ParticleShifting final : public PairEffect<D, ParticleShifting<D>> {
     const double Vj = p.mass[j] / p.density[j];
     const Vec<D> gradW = nb.F * nb.rij;
     const double ratio = nb.W / w_dx_;
-    l.gradC += Vj * (1.0 + tensile_ * std::pow(ratio, exponent_)) * gradW;
+    double power = ratio;  // ratio^n by multiplication (n a small integer), not pow in the pair loop
+    for (int k = 1; k < exponent_; ++k) power *= ratio;
+    l.gradC += Vj * (1.0 + tensile_ * power) * gradW;
     const Vec<D> vj = p.v(j);
     l.gradV += (Vj * (vj - l.vi)) * gradW.transpose();
     l.gradRho += Vj * (p.density[j] - l.rhoi) * gradW;
@@ -165,7 +167,8 @@ class ParticleShifting final : public PairEffect<D, ParticleShifting<D>> {
     }
   }
 
-  double coefficient_, speed_, tensile_, exponent_;
+  double coefficient_, speed_, tensile_;
+  int exponent_;
   double w_dx_ = 0, h_ = 0;
   const Field* surface_ = nullptr;
   std::vector<Carried> carried_;
