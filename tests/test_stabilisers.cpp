@@ -959,6 +959,22 @@ TEST_CASE("particle shifting: a lattice is left alone, a displaced particle is p
   CHECK(b.dxdt(k).dot(d) < -0.95 * b.dxdt(k).norm() * d.norm());  // back towards its site
   CHECK(b.dvdt(k).norm() == 0.0);                                    // at rest: nothing to carry
 
+  {  // 3-D: a periodic 16^3 lattice, one particle displaced
+    Box<3> c(keys, dx, 1.6, KernelType::quintic, 16 * dx, true);
+    c.lattice(16, [](const Vec<3>&) { return Vec<3>::Zero(); });
+    c.finish();
+    c.evaluate();
+    double still = 0;
+    for (std::size_t i = 0; i < c.n(); ++i) still = std::max(still, c.dxdt(i).norm());
+    CHECK(still < 1e-12 * U);
+    const std::size_t m = (8 * 16 + 8) * 16 + 8;
+    const Vec<3> d3(0.15 * dx, -0.1 * dx, 0.05 * dx);
+    c.sys.particles.x(m) += d3;
+    c.evaluate();
+    MESSAGE("3-D: displaced by ", d3.transpose(), ": dx/dt = ", c.dxdt(m).transpose());
+    CHECK(c.dxdt(m).dot(d3) < -0.95 * c.dxdt(m).norm() * d3.norm());
+  }
+
   Config missing = Config::fromString("[effects.particle_shifting]\ncoefficient = 2.0\n", "test");
   ConfigTable eff = missing.root().table("effects");
   CHECK_THROWS_WITH_AS(makeEffects<2>(eff), doctest::Contains("speed"), InputError);
