@@ -5,7 +5,7 @@ command per study, each run a scene derived from cases/die_swell_second_order_fl
 Usage
 -----
     /usr/bin/python3 tools/die_swell_study.py STUDY [STUDY ...]
-        [--across N] [--scheme wcsph|isph] [--jobs J] [--out DIR] [--vesph PATH]
+        [--across N] [--scheme wcsph|isph] [--shifting A] [--jobs J] [--out DIR] [--vesph PATH]
         [--only LABEL ...] [--dry-run] [--measure-only] [--no-png]
 
 STUDY is one of (thesis §4.4; v is the centreline velocity, De = |alpha1| v / (mu W),
@@ -55,6 +55,11 @@ OUT/STUDY/STUDY.png.
 --scheme isph runs every run of the named studies with the wsph_isph study's ISPH scene
 (projection instead of the equation of state) and files them under OUT/STUDY_isph/ (CSV
 STUDY_isph.csv), beside the WCSPH ones; not with wsph_isph, which has both.
+
+--shifting A adds particle shifting to every run ([effects.particle_shifting], coefficient A,
+speed U = the feed's mean velocity; docs/theory.md §5.14) with [effects.free_surface]
+(number density, threshold 0.8, where the scene has no detection) for its surface band, and
+files the runs under OUT/STUDY_shifting (OUT/STUDY_isph_shifting with --scheme isph).
 
 --dry-run writes the scenes and prints the commands without running them; --measure-only
 tabulates runs already present. --only LABEL restricts a study to the named runs.
@@ -174,8 +179,9 @@ def g6(x):
     return float(f"{x:.6g}")
 
 
-def scene_for(run, across):
-    """The scene dict of a run: the base case with the run's parameters and resolution."""
+def scene_for(run, across, shifting=0.0):
+    """The scene dict of a run: the base case with the run's parameters and resolution; with
+    shifting > 0, particle shifting of that coefficient (speed: the feed's mean velocity)."""
     with open(BASE_CASE, "rb") as fh:
         s = tomllib.load(fh)
     s = copy.deepcopy(s)
@@ -227,6 +233,11 @@ def scene_for(run, across):
         # blows the die up at the exit within 3.5 ms.
         s["solver"] = {"scheme": "isph", "linear_solver": "umfpack", "gradient": "symmetric",
                        "carried_pressure": "predictor", "density_relaxation_time": 3.2e-4}
+    if shifting > 0:
+        # The surface band of the shifting needs the free-surface flags (theory.md §5.14);
+        # ISPH scenes have them already.
+        e.setdefault("free_surface", {"threshold": 0.8})
+        e["particle_shifting"] = {"coefficient": g6(shifting), "speed": g6(run.v / 1.5)}
     s["integrator"] = {"type": run.integrator}
     s["time"] = {"end": g6(0.045 * scale * run.duration)}
     s["output"] = {"interval": g6(0.002 * scale)}
@@ -437,6 +448,9 @@ def main(argv=None):
     ap.add_argument("--scheme", choices=("wcsph", "isph"), default="wcsph",
                     help="pressure treatment of every run (default wcsph; isph: the wsph_isph "
                          "study's ISPH scene, results under OUT/STUDY_isph)")
+    ap.add_argument("--shifting", type=float, default=0.0, metavar="A",
+                    help="particle shifting of coefficient A in every run (default 0: none; "
+                         "results under OUT/STUDY_shifting)")
     ap.add_argument("--jobs", type=int, default=max(1, os.cpu_count() or 1), metavar="J",
                     help="runs at once (each uses one core: set OMP_NUM_THREADS)")
     ap.add_argument("--out", default="out/die_swell_study", metavar="DIR")
@@ -448,6 +462,8 @@ def main(argv=None):
     a = ap.parse_args(argv)
     if a.across < 5:
         ap.error("--across must be >= 5 (particles across the die)")
+    if a.shifting < 0:
+        ap.error("--shifting must be >= 0")
     if not (a.dry_run or a.measure_only) and not shutil.which(a.vesph) and not os.path.exists(a.vesph):
         ap.error(f"--vesph {a.vesph}: no such executable (build first: see README)")
     if a.scheme == "isph" and "wsph_isph" in a.studies:
@@ -464,7 +480,7 @@ def main(argv=None):
             if not runs:
                 ap.error(f"--only: no run of study {study} is named {sorted(unknown)}; "
                          f"its runs: {[r.label for r in study_runs(study)]}")
-        name = study + ("_isph" if a.scheme == "isph" else "")
+        name = study + ("_isph" if a.scheme == "isph" else "") + ("_shifting" if a.shifting > 0 else "")
         sd = os.path.join(a.out, name)
         todo = []
         for r in runs:
@@ -474,7 +490,7 @@ def main(argv=None):
                 with open(os.path.join(d, r.label + ".toml"), "w") as fh:
                     fh.write(f"# die_swell_study.py {name}: {r.label} (De = {r.De:.4g}, "
                              f"Re = {r.Re:.4g}, {a.across} across)\n")
-                    fh.write(toml_dumps(scene_for(r, a.across)) + "\n")
+                    fh.write(toml_dumps(scene_for(r, a.across, a.shifting)) + "\n")
             todo.append((r, d))
         if a.dry_run:
             for r, d in todo:

@@ -1885,6 +1885,13 @@ def make_die_swell_study_tests(tmp):
             base = tomllib.load(fh)
         for study in dss.STUDIES:
             for r in dss.study_runs(study):
+                shifted = dss.scene_for(r, 10, 1.5)
+                ps = shifted["effects"].get("particle_shifting")
+                expect(ps == {"coefficient": 1.5, "speed": dss.g6(r.v / 1.5)}
+                       and "particle_shifting" not in dss.scene_for(r, 10)["effects"]
+                       and shifted["effects"]["free_surface"] == (dss.scene_for(r, 10)["effects"].get("free_surface")
+                                                                   or {"threshold": 0.8}),
+                       f"{study}/{r.label}: --shifting scene wrong: {ps}, {shifted['effects'].get('free_surface')}")
                 for n in (10, 25):
                     s = dss.scene_for(r, n)
                     back = tomllib.loads(dss.toml_dumps(s))
