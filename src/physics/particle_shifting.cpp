@@ -33,8 +33,6 @@
 // pushed into it) and in the velocity gradient with the wall velocities the walls gave them;
 // an evolving field enters with wall values only when the walls extrapolate it.
 // V_j = m_j / rho_j.
-#include <cmath>
-
 #include "vesph/physics/registry.hpp"
 
 namespace vesph {
@@ -67,7 +65,7 @@ class ParticleShifting final : public PairEffect<D, ParticleShifting<D>> {
     int components = 0;
     for (std::size_t k = 0; k < s.evolving->size(); ++k) {
       const Field* f = (*s.evolving)[k];
-      carried_.push_back({f, static_cast<int>(k), f->components, f->extrapolated_to_walls});
+      carried_.push_back({f, static_cast<int>(k), components, f->extrapolated_to_walls});
       components += f->components;
     }
     if (components > kMaxCarried)
@@ -119,16 +117,14 @@ class ParticleShifting final : public PairEffect<D, ParticleShifting<D>> {
     const Vec<D> dv = l.gradV * du;
     for (int a = 0; a < D; ++a) ctx.dvdt[D * i + a] += dv[a];
     ctx.drhodt[i] += l.gradRho.dot(du);
-    int c0 = 0;
-    for (std::size_t f = 0; f < carried_.size(); ++f) {
-      const Carried& cf = carried_[f];
-      double* rate = ctx.field_rates[cf.slot] + static_cast<std::size_t>(cf.components) * i;
-      for (int c = 0; c < cf.components; ++c) {
+    for (const Carried& cf : carried_) {
+      const int nc = cf.field->components;
+      double* rate = ctx.field_rates[cf.slot] + static_cast<std::size_t>(nc) * i;
+      for (int c = 0; c < nc; ++c) {
         double s = 0;
-        for (int b = 0; b < D; ++b) s += l.gradS[(c0 + c) * D + b] * du[b];
+        for (int b = 0; b < D; ++b) s += l.gradS[(cf.offset + c) * D + b] * du[b];
         rate[c] += s;
       }
-      c0 += cf.components;
     }
   }
 
@@ -136,7 +132,7 @@ class ParticleShifting final : public PairEffect<D, ParticleShifting<D>> {
   struct Carried {
     const Field* field;
     int slot;
-    int components;
+    int offset;  // its first component in Local::gradS
     bool walls;  // the walls extrapolate it (Fang eq. 46)
   };
 
@@ -153,17 +149,14 @@ class ParticleShifting final : public PairEffect<D, ParticleShifting<D>> {
     l.gradV += (Vj * (vj - l.vi)) * gradW.transpose();
     l.gradRho += Vj * (p.density[j] - l.rhoi) * gradW;
     if (surface_ && surface_->data[j] > 0.5) l.nearSurface = true;
-    int c0 = 0;
     for (const Carried& cf : carried_) {
-      if (moving || cf.walls) {
-        const double* sj = cf.field->at(j);
-        const double* si = cf.field->at(i);
-        for (int c = 0; c < cf.components; ++c) {
-          const double d = Vj * (sj[c] - si[c]);
-          for (int b = 0; b < D; ++b) l.gradS[(c0 + c) * D + b] += d * gradW[b];
-        }
+      if (!moving && !cf.walls) continue;
+      const double* sj = cf.field->at(j);
+      const double* si = cf.field->at(i);
+      for (int c = 0; c < cf.field->components; ++c) {
+        const double d = Vj * (sj[c] - si[c]);
+        for (int b = 0; b < D; ++b) l.gradS[(cf.offset + c) * D + b] += d * gradW[b];
       }
-      c0 += cf.components;
     }
   }
 
