@@ -5,7 +5,7 @@ command per study, each run a scene derived from cases/die_swell_second_order_fl
 Usage
 -----
     /usr/bin/python3 tools/die_swell_study.py STUDY [STUDY ...]
-        [--across N] [--scheme wcsph|isph] [--shifting A] [--jobs J] [--out DIR] [--vesph PATH]
+        [--across N] [--scheme wcsph|isph] [--shifting A] [--room R] [--jobs J] [--out DIR] [--vesph PATH]
         [--only LABEL ...] [--dry-run] [--measure-only] [--no-png]
 
 STUDY is one of (thesis §4.4; v is the centreline velocity, De = |alpha1| v / (mu W),
@@ -47,7 +47,10 @@ piece in the last frame (fluid particles with die exit - W <= x <= 0.28 m, linke
 one cluster of >= 5 particles, no more than 5 particles detached), and the average swell
 ratio is defined over the later half of the run. Its fluctuation there (the standard
 deviation of the average, swell_std) is reported beside it: at 10 particles across one row
-is 0.1 of the ratio. Per study: OUT/STUDY/STUDY.csv (one row per run: the parameters, exit
+is 0.1 of the ratio. The CSV's removed_at_outflow counts the
+particles the outflow plane (x = 0.30 m) removed: 0 means the front never got there and the
+extrudate was still developing, so its "steady" swell is a start-up value (strongly swelling
+extrudates advance slowly: at a swell ratio s the front moves at about (v/1.5)/s). Per study: OUT/STUDY/STUDY.csv (one row per run: the parameters, exit
 status, steps, wall time, steady swell mean/std per station and average, the filled
 (void-free) swell of die_swell_measure.py, clusters, detached particles, stable), and
 OUT/STUDY/STUDY.png.
@@ -60,6 +63,12 @@ STUDY_isph.csv), beside the WCSPH ones; not with wsph_isph, which has both.
 speed U = the feed's mean velocity; docs/theory.md §5.14) with [effects.free_surface]
 (number density, threshold 0.8, where the scene has no detection) for its surface band, and
 files the runs under OUT/STUDY_shifting (OUT/STUDY_isph_shifting with --scheme isph).
+
+--room R sets the domain's half-height about the die's centreline to R die widths (default
+1.5: y from -0.01 to 0.02 m, the base case's). A particle that crosses the domain's edge ends
+the run, so a strongly swelling extrudate (swell ratio near 2R) or a front that curls back
+over the die's outer faces needs more room: --room 3.5 (y from -0.03 to 0.04 m). Results go
+under OUT/STUDY_roomR (after the _isph/_shifting suffixes).
 
 --dry-run writes the scenes and prints the commands without running them; --measure-only
 tabulates runs already present. --only LABEL restricts a study to the named runs.
@@ -87,6 +96,7 @@ sys.path.insert(0, HERE)
 
 RHO, MU, W = 1000.0, 10.0, 0.01           # kg/m^3, Pa s, m (thesis §4.3)
 DIE_INLET, DIE_EXIT, OUTFLOW = 0.15, 0.2, 0.30
+ROOM = 1.5          # domain half-height about the die's centreline, die widths (the base case's)
 
 
 def deborah(alpha1, v):
@@ -179,9 +189,10 @@ def g6(x):
     return float(f"{x:.6g}")
 
 
-def scene_for(run, across, shifting=0.0):
+def scene_for(run, across, shifting=0.0, room=ROOM):
     """The scene dict of a run: the base case with the run's parameters and resolution; with
-    shifting > 0, particle shifting of that coefficient (speed: the feed's mean velocity)."""
+    shifting > 0, particle shifting of that coefficient (speed: the feed's mean velocity); the
+    domain reaches room die widths above and below the die's centreline."""
     with open(BASE_CASE, "rb") as fh:
         s = tomllib.load(fh)
     s = copy.deepcopy(s)
@@ -189,7 +200,8 @@ def scene_for(run, across, shifting=0.0):
     depth = 5 * dx                       # >= the quintic support 3 h = 4.8 dx
     s["name"] = run.label
     s["particles"]["spacing"] = dx
-    s["domain"]["min"] = [DIE_INLET - depth - 2 * dx, -0.01]
+    s["domain"]["min"] = [DIE_INLET - depth - 2 * dx, g6(W / 2 - room * W)]
+    s["domain"]["max"] = [s["domain"]["max"][0], g6(W / 2 + room * W)]
     fluid, lower, upper = s["blocks"]
     fluid["min"], fluid["max"] = [DIE_INLET, 0.0], [DIE_EXIT, W]
     lower["min"], lower["max"] = [DIE_INLET - depth, -depth], [DIE_EXIT, 0.0]
@@ -336,6 +348,9 @@ def measure(run, d, rc, wall, png):
         row["end_time_s"] = js.get("final_time", math.nan)
         row["steps"] = js.get("steps", math.nan)
         row["max_density_deviation"] = js.get("max_density_deviation", math.nan)
+        # 0: the front never reached the outflow plane, the extrudate was still developing
+        flow = js.get("flow") or {}
+        row["removed_at_outflow"] = flow.get("removed", math.nan)
         if js.get("status") != "ok" and "message" in js:
             row["message"] = js["message"]
     if not os.path.exists(h5):
@@ -374,7 +389,7 @@ COLUMNS = ["label", "model", "v_m_s", "Re", "De", "alpha1_Pa_s2", "alpha2_Pa_s2"
            "procedure", "scheme", "integrator", "thesis_force_N_kg", "thesis_swell",
            "exit_status", "status", "end_time_s", "steps", "wall_s", "max_density_deviation", "swell_mean", "swell_std",
            "swell_x0.21", "swell_x0.23", "swell_x0.25", "filled_mean", "filled_std", "frames_used", "clusters", "detached",
-           "stable", "message", "measure_error"]
+           "removed_at_outflow", "stable", "message", "measure_error"]
 
 
 def fmt(v):
@@ -451,6 +466,10 @@ def main(argv=None):
     ap.add_argument("--shifting", type=float, default=0.0, metavar="A",
                     help="particle shifting of coefficient A in every run (default 0: none; "
                          "results under OUT/STUDY_shifting)")
+    ap.add_argument("--room", type=float, default=ROOM, metavar="R",
+                    help=f"domain half-height about the die's centreline in die widths (default "
+                         f"{ROOM:g}: y from -0.01 to 0.02 m; results under OUT/STUDY_roomR "
+                         f"otherwise)")
     ap.add_argument("--jobs", type=int, default=max(1, os.cpu_count() or 1), metavar="J",
                     help="runs at once (each uses one core: set OMP_NUM_THREADS)")
     ap.add_argument("--out", default="out/die_swell_study", metavar="DIR")
@@ -464,6 +483,9 @@ def main(argv=None):
         ap.error("--across must be >= 5 (particles across the die)")
     if a.shifting < 0:
         ap.error("--shifting must be >= 0")
+    if a.room < 1.5:
+        ap.error("--room must be >= 1.5 (die widths: the die's walls and their dummy layers "
+                 "must lie inside the domain)")
     if not (a.dry_run or a.measure_only) and not shutil.which(a.vesph) and not os.path.exists(a.vesph):
         ap.error(f"--vesph {a.vesph}: no such executable (build first: see README)")
     if a.scheme == "isph" and "wsph_isph" in a.studies:
@@ -480,7 +502,8 @@ def main(argv=None):
             if not runs:
                 ap.error(f"--only: no run of study {study} is named {sorted(unknown)}; "
                          f"its runs: {[r.label for r in study_runs(study)]}")
-        name = study + ("_isph" if a.scheme == "isph" else "") + ("_shifting" if a.shifting > 0 else "")
+        name = study + ("_isph" if a.scheme == "isph" else "") + ("_shifting" if a.shifting > 0 else "") \
+            + (f"_room{a.room:g}" if a.room != ROOM else "")
         sd = os.path.join(a.out, name)
         todo = []
         for r in runs:
@@ -490,7 +513,7 @@ def main(argv=None):
                 with open(os.path.join(d, r.label + ".toml"), "w") as fh:
                     fh.write(f"# die_swell_study.py {name}: {r.label} (De = {r.De:.4g}, "
                              f"Re = {r.Re:.4g}, {a.across} across)\n")
-                    fh.write(toml_dumps(scene_for(r, a.across, a.shifting)) + "\n")
+                    fh.write(toml_dumps(scene_for(r, a.across, a.shifting, a.room)) + "\n")
             todo.append((r, d))
         if a.dry_run:
             for r, d in todo:
@@ -525,12 +548,13 @@ def main(argv=None):
                 w.writerow([fmt(row.get(c)) for c in COLUMNS])
         print(f"== {name} ({a.across} across)")
         print(f"   {'label':<28}{'De':>7}{'Re':>6}{'exit':>6}{'swell':>9}{'std':>8}"
-              f"{'filled':>9}{'clust':>6}{'det':>5}  stable")
+              f"{'filled':>9}{'clust':>6}{'det':>5}{'out':>7}  stable")
         for row in rows:
             print(f"   {row['label']:<28}{row['De']:7.3g}{row['Re']:6.3g}{row['exit_status']:6d}"
                   f"{short(row.get('swell_mean')):>9}{short(row.get('swell_std')):>8}"
                   f"{short(row.get('filled_mean')):>9}"
-                  f"{fmt(row.get('clusters')):>6}{fmt(row.get('detached')):>5}  "
+                  f"{fmt(row.get('clusters')):>6}{fmt(row.get('detached')):>5}"
+                  f"{fmt(row.get('removed_at_outflow')):>7}  "
                   f"{'yes' if row['stable'] else 'NO'}"
                   + (f"   ({row['message']})" if row.get("message") else ""))
         print(f"wrote {csv_path}")

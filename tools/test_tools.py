@@ -1926,6 +1926,24 @@ def make_die_swell_study_tests(tmp):
                         for key in ("min", "max"):
                             expect(np.allclose(s["inflow"][key], base["inflow"][key], atol=1e-12),
                                    f"{r.label}: inflow.{key} differs from the base case")
+        # --room: the default domain is the base case's (y from -0.01 to 0.02 m); room R puts
+        # its lateral edges R die widths from the centreline, nothing else changes.
+        r = dss.study_runs("frontier")[0]
+        s0, s35 = dss.scene_for(r, 10), dss.scene_for(r, 10, room=3.5)
+        expect(s0["domain"]["min"][1] == base["domain"]["min"][1]
+               and s0["domain"]["max"][1] == base["domain"]["max"][1]
+               and s35["domain"]["min"] == [s0["domain"]["min"][0], -0.03]
+               and s35["domain"]["max"] == [s0["domain"]["max"][0], 0.04]
+               and {k: v for k, v in s35.items() if k != "domain"}
+               == {k: v for k, v in s0.items() if k != "domain"},
+               f"--room: domain {s0['domain']} / {s35['domain']}")
+        rc, out, err = tool("die_swell_study.py", "frontier", "--shifting", "1", "--room", "3.5",
+                            "--dry-run", "--only", "re10_de1_leapfrog", "--out", d)
+        expect(rc == 0 and os.path.exists(os.path.join(d, "frontier_shifting_room3.5", "re10_de1_leapfrog",
+                                                       "re10_de1_leapfrog.toml")),
+               f"--room 3.5 --dry-run: exit {rc}", out + err)
+        rc, out, err = tool("die_swell_study.py", "frontier", "--room", "1", "--dry-run", "--out", d)
+        expect(rc == 2 and "--room" in err, f"--room 1: exit {rc}", err)
         de = {v: sorted(round(r.De, 9) for r in dss.study_runs("deborah") if r.v == v)
               for v in (5.0, 10.0)}
         expect(de == {5.0: [0, 0.02, 0.1, 0.2, 0.3], 10.0: [0, 0.02, 0.1, 0.2, 0.3, 0.4, 0.5]},
@@ -1968,9 +1986,12 @@ def make_die_swell_study_tests(tmp):
             rd = os.path.join(sd, "wsph_isph", label)
             os.makedirs(rd, exist_ok=True)
             write_die_swell(os.path.join(rd, label + ".h5"))
+            js = {"status": status, "final_time": 0.8, "steps": 800,
+                  "wall_seconds": 2.5, "message": "density deviation 0.6"}
+            if status == "ok":
+                js["flow"] = {"removed": 37, "released": 900}
             with open(os.path.join(rd, "summary.json"), "w") as fh:
-                json.dump({"status": status, "final_time": 0.8, "steps": 800,
-                           "wall_seconds": 2.5, "message": "density deviation 0.6"}, fh)
+                json.dump(js, fh)
         rc, out, err = tool("die_swell_study.py", "wsph_isph", "--measure-only", "--out", sd,
                             "--no-png")
         expect(rc == 0, f"--measure-only: exit {rc}", out + err)
@@ -1979,7 +2000,8 @@ def make_die_swell_study_tests(tmp):
         expect(abs(float(w["swell_mean"]) - 1.2) < 1e-9 and abs(float(w["swell_std"]) - 0.0326599) < 1e-6,
                f"swell mean/std {w['swell_mean']} {w['swell_std']}, expected 1.2, 0.03266", out)
         expect(w["clusters"] == "1" and w["detached"] == "0" and w["stable"] == "True"
-               and w["exit_status"] == "0" and w["thesis_swell"] == "1.362",
+               and w["exit_status"] == "0" and w["thesis_swell"] == "1.362"
+               and w["removed_at_outflow"] == "37" and i["removed_at_outflow"] == "nan",
                f"finished run: {w}", out)
         expect(i["exit_status"] == "3" and i["stable"] == "False" and "density" in i["message"],
                f"diverged run: {i}", out)
