@@ -47,13 +47,13 @@ piece in the last frame (fluid particles with die exit - W <= x <= 0.28 m, linke
 one cluster of >= 5 particles, no more than 5 particles detached), and the average swell
 ratio is defined over the later half of the run. Its fluctuation there (the standard
 deviation of the average, swell_std) is reported beside it: at 10 particles across one row
-is 0.1 of the ratio. The CSV's removed_at_outflow counts the
-particles the outflow plane (x = 0.30 m) removed: 0 means the front never got there and the
-extrudate was still developing, so its "steady" swell is a start-up value (strongly swelling
-extrudates advance slowly: at a swell ratio s the front moves at about (v/1.5)/s). Per study: OUT/STUDY/STUDY.csv (one row per run: the parameters, exit
-status, steps, wall time, steady swell mean/std per station and average, the filled
-(void-free) swell of die_swell_measure.py, clusters, detached particles, stable), and
-OUT/STUDY/STUDY.png.
+is 0.1 of the ratio. removed_at_outflow counts the particles the outflow plane (x = 0.30 m)
+removed: 0 means the front never got there and the extrudate was still developing, so its
+"steady" swell is a start-up value (strongly swelling extrudates advance slowly: at a swell
+ratio s the front moves at about (v/1.5)/s). Per study: OUT/STUDY/STUDY.csv (one row per run:
+the parameters, exit status, steps, wall time, steady swell mean/std per station and average,
+the filled (void-free) swell of die_swell_measure.py, clusters, detached particles,
+removed_at_outflow, stable), and OUT/STUDY/STUDY.png.
 
 --scheme isph runs every run of the named studies with the wsph_isph study's ISPH scene
 (projection instead of the equation of state) and files them under OUT/STUDY_isph/ (CSV
