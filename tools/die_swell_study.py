@@ -53,7 +53,12 @@ removed: 0 means the front never got there and the extrudate was still developin
 ratio s the front moves at about (v/1.5)/s). Per study: OUT/STUDY/STUDY.csv (one row per run:
 the parameters, exit status, steps, wall time, steady swell mean/std per station and average,
 the filled (void-free) swell of die_swell_measure.py, clusters, detached particles,
-removed_at_outflow, stable), and OUT/STUDY/STUDY.png.
+die_face_residue, removed_at_outflow, stable), and OUT/STUDY/STUDY.png. die_face_residue
+(printed as "face") counts the particles off the largest piece that sit against the die's end
+face (outside the die's width, within 3 dx of the exit): the start-up front's stragglers,
+which the wall holds there for the rest of the run. They are included in clusters and
+detached (and so in the stable flag); the column tells them apart from an extrudate that
+breaks up.
 
 --scheme isph runs every run of the named studies with the wsph_isph study's ISPH scene
 (projection instead of the equation of state) and files them under OUT/STUDY_isph/ (CSV
@@ -297,22 +302,26 @@ def run_one(run, d, vesph):
     return rc, time.time() - t0
 
 
-def extrudate_clusters(h5):
-    """(clusters of >= 5 particles, detached particles) of the last frame's extrudate."""
+def extrudate_clusters(h5, frame=None):
+    """(clusters of >= 5 particles, detached particles, die-face residue) of the extrudate in the
+    last frame (or in frame index `frame`). The residue: the particles off the largest piece that lie against the die's end
+    face (outside the die's width, less than 3 dx beyond the exit), where the start-up front's
+    stragglers stay held by the wall; they are counted among clusters/detached as well."""
     import numpy as np
     from drop_measure import clusters
     import die_swell_measure as dsm
 
     r = dsm.Run(h5)
     try:
-        k = len(r.frames) - 1
+        k = len(r.frames) - 1 if frame is None else frame
         fr = dsm.read_frame(r, k)
-        if fr is None and k > 0:
+        if fr is None and k > 0 and frame is None:
             fr = dsm.read_frame(r, k - 1)
         pos = fr["position"][fr["kind"] == 0]
-        m = (pos[:, 0] >= DIE_EXIT - W) & (pos[:, 0] <= 0.28)
-        n, detached, _, _, _ = clusters(pos[m], 1.5 * r.dx, 5)
-        return n, detached
+        pos = pos[(pos[:, 0] >= DIE_EXIT - W) & (pos[:, 0] <= 0.28)]
+        n, detached, _, _, largest = clusters(pos, 1.5 * r.dx, 5)
+        face = (pos[:, 0] < DIE_EXIT + 3 * r.dx) & ((pos[:, 1] < 0.0) | (pos[:, 1] > W))
+        return n, detached, int(np.count_nonzero(face & ~largest))
     finally:
         r.close()
 
@@ -375,9 +384,9 @@ def measure(run, d, rc, wall, png):
     else:
         row["measure_error"] = (m.stderr or m.stdout).strip().splitlines()[-1:]
     try:
-        row["clusters"], row["detached"] = extrudate_clusters(h5)
+        row["clusters"], row["detached"], row["die_face_residue"] = extrudate_clusters(h5)
     except Exception as ex:  # an unreadable output is reported, not fatal for the study
-        row["clusters"], row["detached"] = math.nan, math.nan
+        row["clusters"], row["detached"], row["die_face_residue"] = math.nan, math.nan, math.nan
         row["measure_error"] = str(ex)
     mean = row.get("swell_mean")
     row["stable"] = bool(rc == 0 and row["clusters"] == 1 and row["detached"] <= 5
@@ -389,7 +398,7 @@ COLUMNS = ["label", "model", "v_m_s", "Re", "De", "alpha1_Pa_s2", "alpha2_Pa_s2"
            "procedure", "scheme", "integrator", "thesis_force_N_kg", "thesis_swell",
            "exit_status", "status", "end_time_s", "steps", "wall_s", "max_density_deviation", "swell_mean", "swell_std",
            "swell_x0.21", "swell_x0.23", "swell_x0.25", "filled_mean", "filled_std", "frames_used", "clusters", "detached",
-           "removed_at_outflow", "stable", "message", "measure_error"]
+           "die_face_residue", "removed_at_outflow", "stable", "message", "measure_error"]
 
 
 def fmt(v):
@@ -548,12 +557,12 @@ def main(argv=None):
                 w.writerow([fmt(row.get(c)) for c in COLUMNS])
         print(f"== {name} ({a.across} across)")
         print(f"   {'label':<28}{'De':>7}{'Re':>6}{'exit':>6}{'swell':>9}{'std':>8}"
-              f"{'filled':>9}{'clust':>6}{'det':>5}{'out':>7}  stable")
+              f"{'filled':>9}{'clust':>6}{'det':>5}{'face':>5}{'out':>7}  stable")
         for row in rows:
             print(f"   {row['label']:<28}{row['De']:7.3g}{row['Re']:6.3g}{row['exit_status']:6d}"
                   f"{short(row.get('swell_mean')):>9}{short(row.get('swell_std')):>8}"
                   f"{short(row.get('filled_mean')):>9}"
-                  f"{fmt(row.get('clusters')):>6}{fmt(row.get('detached')):>5}"
+                  f"{fmt(row.get('clusters')):>6}{fmt(row.get('detached')):>5}{fmt(row.get('die_face_residue')):>5}"
                   f"{fmt(row.get('removed_at_outflow')):>7}  "
                   f"{'yes' if row['stable'] else 'NO'}"
                   + (f"   ({row['message']})" if row.get("message") else ""))

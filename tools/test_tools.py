@@ -1677,7 +1677,9 @@ def ds_frames(stress=True):
     return spec
 
 
-def write_die_swell(path, stress=True, spec=None, scene=DS_SCENE, dim=2, frames=True, lane=1.0):
+def write_die_swell(path, stress=True, spec=None, scene=DS_SCENE, dim=2, frames=True, lane=1.0,
+                    extra=None):
+    """extra: fluid positions added to every frame (stragglers off the extrudate)."""
     with h5py.File(path, "w") as f:
         f.attrs["format"] = "vesph-1"
         f.attrs["dim"] = np.int64(dim)
@@ -1687,6 +1689,9 @@ def write_die_swell(path, stress=True, spec=None, scene=DS_SCENE, dim=2, frames=
             return path
         for i, (t, front, rows_far) in enumerate(spec or ds_frames()):
             pos, kind = ds_particles(front, rows_far, lane=lane)
+            if extra is not None:
+                pos = np.vstack([pos, extra])
+                kind = np.concatenate([kind, np.zeros(len(extra), np.uint8)])
             n = len(kind)
             g = f.create_group(f"frames/{i:06d}")
             g.attrs["time"] = np.float64(t)
@@ -1980,12 +1985,15 @@ def make_die_swell_study_tests(tmp):
     def tabulation():
         # Two runs of the wsph_isph study with synthetic outputs: one finished (the synthetic
         # extrudate swells to 29, 31, 30 rows of 25 over the later half: mean 1.2, std 0.033,
-        # one piece), one stopped as diverged.
+        # one piece; three stragglers on the die's end face above the exit and one beyond the
+        # front, all detached), one stopped as diverged.
         sd = os.path.join(d, "tab")
+        face = [[DS_EXIT + 0.5 * DS_DX, DS_W + k * DS_DX] for k in (4, 6, 8)]
+        stragglers = np.array(face + [[0.27, DS_W + 10 * DS_DX]])
         for label, status in (("wcsph", "ok"), ("isph", "diverged")):
             rd = os.path.join(sd, "wsph_isph", label)
             os.makedirs(rd, exist_ok=True)
-            write_die_swell(os.path.join(rd, label + ".h5"))
+            write_die_swell(os.path.join(rd, label + ".h5"), extra=stragglers if status == "ok" else None)
             js = {"status": status, "final_time": 0.8, "steps": 800,
                   "wall_seconds": 2.5, "message": "density deviation 0.6"}
             if status == "ok":
@@ -1999,7 +2007,8 @@ def make_die_swell_study_tests(tmp):
         w, i = rows["wcsph"], rows["isph"]
         expect(abs(float(w["swell_mean"]) - 1.2) < 1e-9 and abs(float(w["swell_std"]) - 0.0326599) < 1e-6,
                f"swell mean/std {w['swell_mean']} {w['swell_std']}, expected 1.2, 0.03266", out)
-        expect(w["clusters"] == "1" and w["detached"] == "0" and w["stable"] == "True"
+        expect(w["clusters"] == "1" and w["detached"] == "4" and w["die_face_residue"] == "3"
+               and w["stable"] == "True"
                and w["exit_status"] == "0" and w["thesis_swell"] == "1.362"
                and w["removed_at_outflow"] == "37" and i["removed_at_outflow"] == "nan",
                f"finished run: {w}", out)
