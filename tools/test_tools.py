@@ -2034,6 +2034,42 @@ def make_die_swell_study_tests(tmp):
             ("die_swell_study: bad arguments", bad_arguments)]
 
 
+def make_die_swell_lip_tests(tmp):
+    d = os.path.join(tmp, "die_swell_lip")
+    os.makedirs(d, exist_ok=True)
+
+    def lip_table():
+        # The synthetic die swell (25 rows in the die, 30 from 0.21 m on, T_yy = b = 30 Pa) with
+        # a pressure falling linearly along the die at 1.5 times plane Poiseuille's gradient for
+        # mu = 2 Pa s, U = 0.1 m/s (12 mu U / W^2 = 2.4e4 Pa/m) and p = 0 beyond the exit.
+        scene = DS_SCENE + "[fluid]\nviscosity = 2.0\n[inflow]\nmean_velocity = 0.1\n"
+        h5 = write_die_swell(os.path.join(d, "lip.h5"), scene=scene)
+        G = 1.5 * 12 * 2.0 * 0.1 / DS_W ** 2
+        with h5py.File(h5, "r+") as f:
+            for nm in f["frames"]:
+                g = f["frames"][nm]
+                x = g["position"][:, 0]
+                g["pressure"][...] = np.where(x < DS_EXIT, G * (DS_EXIT - x), 0.0)
+        out_csv = os.path.join(d, "lip.csv")
+        rc, out, err = tool("die_swell_lip.py", h5, "--frames", "4", "--csv", out_csv)
+        expect(rc == 0 and "-3.6e+04 Pa/m" in out and "+50 %" in out,
+               f"die gradient: exit {rc}", out + err)
+        rows = read_csv_rows(out_csv) if os.path.exists(out_csv) else []
+        expect(len(rows) == 13, f"{len(rows)} bands, expected 13 (exit - dx to exit + 2 W by 4 dx)")
+        far = [r for r in rows if float(r["x0_m"]) >= 0.21]
+        expect(far and all(abs(float(r["count_ratio"]) - 1.2) < 1e-6 for r in far),
+               f"count ratio 30/25 beyond 0.21 m: {[r['count_ratio'] for r in far]}")
+        expect(all(abs(float(r["T_yy_outer_Pa"]) - 30.0) < 1e-9 and abs(float(r["p_outer_Pa"])) < 1e-9
+                   and abs(float(r["balance_outer_Pa"]) - 30.0) < 1e-9 for r in far),
+               f"outer rows: p 0, T_yy 30, balance 30: {far[:1]}")
+        rc, out, err = tool("die_swell_lip.py", os.path.join(d, "missing.h5"))
+        expect(rc == 1 and "die_swell_lip: error" in err, f"missing file: exit {rc}", out + err)
+        rc, out, err = tool("die_swell_lip.py", h5, "--frames", "0")
+        expect(rc == 2, f"--frames 0: exit {rc}", out + err)
+
+    return [("die_swell_lip: die pressure gradient against Poiseuille, bands past the exit", lip_table)]
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--keep", metavar="DIR", help="keep the synthetic outputs in DIR")
@@ -2051,7 +2087,7 @@ def main():
     try:
         for name, fn in (make_tests(tmp) + make_xpp_tests(tmp) + make_drop_tests(tmp)
                          + make_hydrostatic_tests(tmp) + make_die_swell_tests(tmp)
-                         + make_die_swell_study_tests(tmp)):
+                         + make_die_swell_study_tests(tmp) + make_die_swell_lip_tests(tmp)):
             r.run(name, fn)
     finally:
         if not a.keep:

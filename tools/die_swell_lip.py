@@ -1,0 +1,195 @@
+#!/usr/bin/python3
+"""Where a planar die-swell run decides its swell: the flow at the die's lip, averaged over the
+last frames, as a table (printed and CSV) and a PNG. Written to compare WCSPH and ISPH runs of
+the same scene (docs/studies.md §5, "WSPH against ISPH").
+
+Usage
+-----
+    /usr/bin/python3 tools/die_swell_lip.py RUN.h5 [RUN.h5 ...] [--frames N]
+        [--die-width 0.01] [--die-exit 0.2] [--csv FILE] [--png FILE]
+
+SI units throughout (m, s, m/s, Pa). Only 2D outputs; the die runs along x with walls at
+y = 0 and y = W (--die-width), its exit at x = --die-exit. The frames used are the last N
+(--frames, default 8); every quantity is averaged over them.
+
+Per run
+-------
+- The die's pressure gradient: a least-squares line through the fluid particles' pressures
+  over exit - 4 W <= x <= exit - W/2 (where the flow is developed and the exit's influence
+  small), against plane Poiseuille flow dp/dx = -12 mu U / W^2 with mu = fluid.viscosity and
+  U = inflow.mean_velocity of the stored scene (omitted when the scene lacks either).
+- Bands across the flow, 4 dx long, from one dx before the exit to 2 W beyond it: the mean u_x
+  of the centre particles (|y - W/2| < W/5) and of the outer rows (within 1.2 dx of the band's
+  outermost |y - W/2|, both sides); the median pressure of each; the median T_yy of the outer
+  rows (extra_stress, when the frames have it) and the normal stress balance there,
+  -p + T_yy (zero on a free surface whose normal is y, thesis §4.1); and the band's particle
+  count per unit length over the die's (over exit - 4 W ... about exit - W/2; the swell of volume conservation at lattice spacing:
+  the count ratio stays honest where the envelope counts voids or the particles crowd).
+
+Exit status: 0; 1 for an unreadable file, a frame without pressure, or a 3D output; 2 for bad
+arguments.
+"""
+import argparse
+import warnings
+import csv
+import os
+import sys
+
+import numpy as np
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+import die_swell_measure as dsm  # noqa: E402
+from vesph_output import ToolError  # noqa: E402
+
+COLUMNS = ["run", "x0_m", "x1_m", "u_centre_m_s", "u_outer_m_s", "p_centre_Pa", "p_outer_Pa",
+           "T_yy_outer_Pa", "balance_outer_Pa", "count_ratio"]
+
+
+def frames_of(run, n):
+    g = run.f["frames"]
+    out = []
+    for nm, _ in run.frames[-n:]:
+        fr = g[nm]
+        if "pressure" not in fr:
+            raise ToolError(f"{run.path}: frame {nm} has no pressure")
+        kind = fr["kind"][:]
+        fluid = kind == 0
+        d = {"position": fr["position"][:][fluid], "velocity": fr["velocity"][:][fluid],
+             "pressure": fr["pressure"][:][fluid]}
+        if "extra_stress" in fr:
+            d["T_yy"] = fr["extra_stress"][:][fluid][:, 2]  # stored xx, xy, yy
+        out.append(d)
+    return out
+
+
+def die_gradient(frames, exit_x, W):
+    """Least-squares dp/dx over exit - 4W <= x <= exit - W/2, all frames pooled."""
+    xs, ps = [], []
+    for fr in frames:
+        x = fr["position"][:, 0]
+        m = (x >= exit_x - 4 * W) & (x <= exit_x - 0.5 * W)
+        xs.append(x[m])
+        ps.append(fr["pressure"][m])
+    x, p = np.concatenate(xs), np.concatenate(ps)
+    if len(x) < 2:
+        return float("nan")
+    return float(np.polyfit(x, p, 1)[0])
+
+
+def lip_rows(frames, dx, exit_x, W):
+    # the die's particles per unit length over a whole number of spacings (a lattice puts the
+    # same number of columns in every such window)
+    length = max(1, round(3.5 * W / dx)) * dx
+    die_per_m = []
+    for fr in frames:
+        x = fr["position"][:, 0]
+        die_per_m.append(np.count_nonzero((x >= exit_x - 4 * W) & (x < exit_x - 4 * W + length)) / length)
+    die_density = float(np.mean(die_per_m))
+    rows = []
+    x0 = exit_x - dx
+    while x0 < exit_x + 2 * W - 1e-12:
+        x1 = x0 + 4 * dx
+        acc = []
+        for fr in frames:
+            pos = fr["position"]
+            m = (pos[:, 0] >= x0) & (pos[:, 0] < x1)
+            if np.count_nonzero(m) < 2:
+                continue
+            d = np.abs(pos[m, 1] - 0.5 * W)
+            centre = d < W / 5
+            outer = d > d.max() - 1.2 * dx
+            u, p = fr["velocity"][m, 0], fr["pressure"][m]
+            tyy = np.median(fr["T_yy"][m][outer]) if "T_yy" in fr else np.nan
+            p_out = np.median(p[outer])
+            acc.append((u[centre].mean() if centre.any() else np.nan, u[outer].mean(),
+                        np.median(p[centre]) if centre.any() else np.nan, p_out, tyy, -p_out + tyy,
+                        np.count_nonzero(m) / (x1 - x0) / die_density))
+        if acc:
+            rows.append([x0, x1] + list(np.nanmean(np.array(acc, dtype=float), axis=0)))
+        x0 = x1
+    return rows
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(prog="die_swell_lip.py", description=__doc__.split("\n")[0])
+    ap.add_argument("paths", nargs="+", metavar="RUN.h5")
+    ap.add_argument("--frames", type=int, default=8, metavar="N")
+    ap.add_argument("--die-width", type=float, default=0.01, metavar="W")
+    ap.add_argument("--die-exit", type=float, default=0.2, metavar="X")
+    ap.add_argument("--csv", metavar="FILE")
+    ap.add_argument("--png", metavar="FILE")
+    a = ap.parse_args(argv)
+    if a.frames < 1:
+        ap.error("--frames must be >= 1")
+    if not (a.die_width > 0):
+        ap.error("--die-width must be > 0")
+    W, exit_x = a.die_width, a.die_exit
+    warnings.simplefilter("ignore", RuntimeWarning)  # a band without T_yy (Newtonian) averages to nan
+    table, curves = [], {}
+    try:
+        for path in a.paths:
+            r = dsm.Run(path)
+            try:
+                frames = frames_of(r, a.frames)
+                name = os.path.splitext(os.path.basename(path))[0]
+                label = f"{os.path.basename(os.path.dirname(os.path.abspath(path)))}/{name}"
+                g = die_gradient(frames, exit_x, W)
+                mu = (r.scene.get("fluid") or {}).get("viscosity")
+                U = (r.scene.get("inflow") or {}).get("mean_velocity")
+                line = f"{label}: die dp/dx {g:.4g} Pa/m"
+                if mu and U:
+                    pois = -12.0 * mu * U / W ** 2
+                    line += f" (plane Poiseuille {pois:.4g}: {100 * (g / pois - 1):+.0f} %)"
+                print(line)
+                print(f"   {'x0':>7} {'x1':>7} {'u_c':>6} {'u_out':>6} {'p_c':>9} {'p_out':>9} "
+                      f"{'Tyy_out':>9} {'-p+Tyy':>9} {'count':>6}")
+                rows = lip_rows(frames, r.dx, exit_x, W)
+                for row in rows:
+                    print(f"   {row[0]:7.4f} {row[1]:7.4f} {row[2]:6.2f} {row[3]:6.2f} {row[4]:9.0f} "
+                          f"{row[5]:9.0f} {row[6]:9.0f} {row[7]:9.0f} {row[8]:6.3f}")
+                    table.append([label] + row)
+                curves[label] = np.array(rows)
+            finally:
+                r.f.close()
+    except ToolError as e:
+        print(f"die_swell_lip: error: {e}", file=sys.stderr)
+        return 1
+    if a.csv:
+        with open(a.csv, "w", newline="") as fh:
+            w = csv.writer(fh)
+            w.writerow(COLUMNS)
+            for row in table:
+                w.writerow([row[0]] + [f"{v:.6g}" for v in row[1:]])
+        print(f"wrote {a.csv}")
+    if a.png:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+        fig, ax = plt.subplots(1, 3, figsize=(13, 3.8))
+        for k, (label, c) in enumerate(curves.items()):
+            xm = 0.5 * (c[:, 0] + c[:, 1])
+            col = f"C{k}"
+            ax[0].plot(xm, c[:, 2], "-", color=col, label=f"{label} centre")
+            ax[0].plot(xm, c[:, 3], "--", color=col, label=f"{label} outer rows")
+            ax[1].plot(xm, c[:, 4] / 1e3, "-", color=col, label=f"{label} centre")
+            ax[1].plot(xm, c[:, 5] / 1e3, "--", color=col, label=f"{label} outer rows")
+            ax[1].plot(xm, c[:, 6] / 1e3, ":", color=col, label=f"{label} T_yy outer")
+            ax[2].plot(xm, c[:, 8], "-", color=col, label=label)
+        for axis, yl in zip(ax, ("u_x [m/s]", "p, T_yy [kPa]", "count per length / die's")):
+            axis.axvline(exit_x, color="k", lw=0.8)
+            axis.set_xlabel("x [m]")
+            axis.set_ylabel(yl)
+            axis.grid(alpha=0.3)
+        ax[0].legend(fontsize=7)
+        ax[1].legend(fontsize=6)
+        ax[2].legend(fontsize=7)
+        fig.suptitle(f"the flow at the die's lip (mean of the last {a.frames} frames)", fontsize=10)
+        fig.tight_layout()
+        fig.savefig(a.png, dpi=110)
+        print(f"wrote {a.png}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
