@@ -23,17 +23,18 @@ Per run
   outermost |y - W/2|, both sides); the median pressure of each; the median T_yy of the outer
   rows (extra_stress, when the frames have it) and the normal stress balance there,
   -p + T_yy (zero on a free surface whose normal is y, thesis §4.1); and the band's particle
-  count per unit length over the die's (over exit - 4 W ... about exit - W/2; the swell of volume conservation at lattice spacing:
-  the count ratio stays honest where the envelope counts voids or the particles crowd).
+  count per unit length over the die's (counted from exit - 4 W over the whole number of
+  spacings nearest 3.5 W): the swell of volume conservation at lattice spacing, honest where
+  the envelope counts voids or the particles crowd.
 
 Exit status: 0; 1 for an unreadable file, a frame without pressure, or a 3D output; 2 for bad
 arguments.
 """
 import argparse
-import warnings
 import csv
 import os
 import sys
+import warnings
 
 import numpy as np
 
@@ -47,18 +48,20 @@ COLUMNS = ["run", "x0_m", "x1_m", "u_centre_m_s", "u_outer_m_s", "p_centre_Pa", 
 
 
 def frames_of(run, n):
-    g = run.f["frames"]
+    """The last n frames' fluid particles: position, velocity, pressure and, with a stress
+    field, T_yy (die_swell_measure's reader checks the shapes; the pressure is read here)."""
     out = []
-    for nm, _ in run.frames[-n:]:
-        fr = g[nm]
-        if "pressure" not in fr:
+    for k in range(max(0, len(run.frames) - n), len(run.frames)):
+        nm = run.frames[k][0]
+        g = run.f["frames"][nm]
+        if "pressure" not in g:
             raise ToolError(f"{run.path}: frame {nm} has no pressure")
-        kind = fr["kind"][:]
-        fluid = kind == 0
-        d = {"position": fr["position"][:][fluid], "velocity": fr["velocity"][:][fluid],
-             "pressure": fr["pressure"][:][fluid]}
+        fr = run.read(k, full=True)
+        fluid = fr["kind"] == 0
+        d = {"position": fr["position"][fluid], "velocity": fr["velocity"][fluid],
+             "pressure": g["pressure"][...][fluid]}
         if "extra_stress" in fr:
-            d["T_yy"] = fr["extra_stress"][:][fluid][:, 2]  # stored xx, xy, yy
+            d["T_yy"] = fr["extra_stress"][fluid, 2]  # stored xx, xy, yy
         out.append(d)
     return out
 
@@ -106,7 +109,10 @@ def lip_rows(frames, dx, exit_x, W):
                         np.median(p[centre]) if centre.any() else np.nan, p_out, tyy, -p_out + tyy,
                         np.count_nonzero(m) / (x1 - x0) / die_density))
         if acc:
-            rows.append([x0, x1] + list(np.nanmean(np.array(acc, dtype=float), axis=0)))
+            with warnings.catch_warnings():  # a column without values (T_yy, Newtonian) stays nan
+                warnings.simplefilter("ignore", RuntimeWarning)
+                mean = np.nanmean(np.array(acc, dtype=float), axis=0)
+            rows.append([x0, x1] + list(mean))
         x0 = x1
     return rows
 
@@ -125,7 +131,6 @@ def main(argv=None):
     if not (a.die_width > 0):
         ap.error("--die-width must be > 0")
     W, exit_x = a.die_width, a.die_exit
-    warnings.simplefilter("ignore", RuntimeWarning)  # a band without T_yy (Newtonian) averages to nan
     table, curves = [], {}
     try:
         for path in a.paths:
@@ -151,7 +156,7 @@ def main(argv=None):
                     table.append([label] + row)
                 curves[label] = np.array(rows)
             finally:
-                r.f.close()
+                r.close()
     except ToolError as e:
         print(f"die_swell_lip: error: {e}", file=sys.stderr)
         return 1

@@ -304,9 +304,10 @@ def run_one(run, d, vesph):
 
 def extrudate_clusters(h5, frame=None):
     """(clusters of >= 5 particles, detached particles, die-face residue) of the extrudate in the
-    last frame (or in frame index `frame`). The residue: the particles off the largest piece that lie against the die's end
-    face (outside the die's width, less than 3 dx beyond the exit), where the start-up front's
-    stragglers stay held by the wall; they are counted among clusters/detached as well."""
+    last frame (or in frame index `frame`). The residue: the particles off the largest piece
+    that lie against the die's end face (outside the die's width, less than 3 dx beyond the
+    exit), where the start-up front's stragglers stay held by the wall; they are counted among
+    clusters/detached as well."""
     import numpy as np
     from drop_measure import clusters
     import die_swell_measure as dsm
