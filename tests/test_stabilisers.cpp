@@ -1100,3 +1100,90 @@ TEST_CASE("particle shifting: the free-surface band keeps only the tangential sh
   CHECK(deep[0] < 1e-12);
   CHECK(deep[1] < 1e-12);
 }
+
+// ---------------------------------------------------------------------------------------------
+// Free-surface pressure of WCSPH (src/physics/surface_pressure.cpp)
+
+TEST_CASE("surface pressure: flagged particles carry p = n.T.n (thesis §4.2 sigma.n = 0), the others the equation of state") {
+  // A block at rest, 24 x 12 particles, compressed by 1 % (EOS pressure c^2 * 10 kg/m^3 = 1000 Pa),
+  // carrying a uniform elastic stress S of an Oldroyd-B fluid (no solvent: T = S). The top
+  // and bottom rows' outward normals are -+y, the sides' -+x: there p = S_yy and S_xx, in the
+  // corners n.S.n of their diagonal normal; the interior keeps 1000 Pa.
+  const double dx = 0.01, Sxx = 3000.0, Sxy = -700.0, Syy = -400.0;
+  for (const bool zero : {false, true}) {
+    const std::string keys = std::string("[effects.velocity_gradient]\n[effects.oldroyd_b]\nrelaxation_time = 0.1\n"
+                                         "polymer_viscosity = 1.0\n[effects.free_surface]\n[effects.surface_pressure]\n") +
+                             (zero ? "value = \"zero\"\nambient_pressure = 50.0\n" : "");
+    Box<2> b(keys, dx, 1.6, KernelType::quintic, 40 * dx, false);
+    for (int i = 0; i < 24; ++i)
+      for (int j = 0; j < 12; ++j) b.add(Vec<2>((i + 0.5) * dx, (j + 0.5) * dx), Vec<2>::Zero(), 1.01 * kRho0, b.mass());
+    b.finish();
+    Field* S = b.sys.particles.fields.find("elastic_stress");
+    REQUIRE(S);
+    for (std::size_t k = 0; k < b.n(); ++k) {
+      S->data[3 * k] = Sxx;
+      S->data[3 * k + 1] = Sxy;
+      S->data[3 * k + 2] = Syy;
+    }
+    b.evaluate();
+    const double* p = b.sys.particles.fields.find("pressure")->data.data();
+    const double* flag = b.sys.particles.fields.find("free_surface")->data.data();
+    const double* normal = b.sys.particles.fields.find("surface_normal")->data.data();
+    const Mat<2> T = (Mat<2>() << Sxx, Sxy, Sxy, Syy).finished();
+    const double eos = kSound * kSound * 0.01 * kRho0;
+    double worst_surface = 0, worst_interior = 0, worst_top = 0, worst_side = 0;
+    int flagged = 0, interior = 0;
+    for (std::size_t k = 0; k < b.n(); ++k) {
+      const Vec<2> x = b.sys.particles.x(k), n(normal[2 * k], normal[2 * k + 1]);
+      if (flag[k] > 0.5) {
+        ++flagged;
+        const double expect = zero ? 50.0 : n.dot(T * n);
+        worst_surface = std::max(worst_surface, std::abs(p[k] - expect));
+        if (x[1] > 11 * dx && x[0] > 7 * dx && x[0] < 17 * dx) worst_top = std::max(worst_top, (n - Vec<2>(0, 1)).norm());
+        if (x[0] < dx && x[1] > 4 * dx && x[1] < 8 * dx) worst_side = std::max(worst_side, (n - Vec<2>(-1, 0)).norm());
+      } else {
+        ++interior;
+        worst_interior = std::max(worst_interior, std::abs(p[k] - eos));
+      }
+    }
+    MESSAGE(std::string(zero ? "zero" : "normal_stress"), ": ", flagged, " flagged, ", interior, " inside; |p - p_s| <= ", worst_surface,
+            " Pa, |p - p_eos| <= ", worst_interior, " Pa; normals off by ", worst_top, " (top), ", worst_side, " (left side)");
+    CHECK(flagged >= 2 * 24 + 2 * 10);  // the outermost ring at least
+    CHECK(interior > 0);
+    CHECK(worst_surface < 1e-9 * Sxx);
+    CHECK(worst_interior < 1e-9 * eos);
+    CHECK(worst_top < 1e-12);   // the top row's normal is +y by the lattice's symmetry
+    CHECK(worst_side < 1e-12);  // the left column's -x
+  }
+
+  // The pressure gradient sees it: on the top row, eq. 3.18 (symmetric form) pushes a particle
+  // out by sum_j m_j (p_i/rho_i^2 + p_j/rho_j^2) |grad W|; with p_i = 0 only the p_j term is
+  // left, half the force (the flagged neighbours in the same row add nothing along y).
+  const auto top_force = [&](bool with) {
+    const std::string keys = std::string("[effects.velocity_gradient]\n[effects.oldroyd_b]\nrelaxation_time = 0.1\n"
+                                         "polymer_viscosity = 1.0\n[effects.free_surface]\n[effects.pressure_gradient]\n") +
+                             (with ? "[effects.surface_pressure]\nvalue = \"zero\"\n" : "");
+    Box<2> b(keys, dx, 1.6, KernelType::quintic, 40 * dx, false);
+    for (int i = 0; i < 24; ++i)
+      for (int j = 0; j < 12; ++j) b.add(Vec<2>((i + 0.5) * dx, (j + 0.5) * dx), Vec<2>::Zero(), 1.01 * kRho0, b.mass());
+    b.finish();
+    b.evaluate();
+    return b.dvdt(12 * 11 + 11)[1];  // particle (11, 11): the top row, mid-width (x-major order: k = 12 i + j)
+  };
+  const double eos_force = top_force(false), surface_force = top_force(true);
+  MESSAGE("top row dv_y/dt: equation of state ", eos_force, " m/s^2, surface pressure zero ", surface_force, " m/s^2");
+  CHECK(eos_force > 0);                   // the compressed block pushes its top row out
+  CHECK(std::abs(surface_force / eos_force - 0.5) < 1e-9);
+
+  // Input errors: no free-surface detection; a normal stress without a constitutive model.
+  for (const auto& [keys, message] :
+       {std::pair{std::string("[effects.surface_pressure]\n"), std::string("add [effects.free_surface]")},
+        std::pair{std::string("[effects.free_surface]\n[effects.surface_pressure]\n"), std::string("value = \"zero\"")}}) {
+    Box<2> b(keys, dx, 1.6, KernelType::quintic, 40 * dx, false);
+    b.lattice(6, [](const Vec<2>&) { return Vec<2>::Zero(); });
+    CHECK_THROWS_WITH_AS(b.finish(), doctest::Contains(message.c_str()), InputError);
+  }
+  Config bad = Config::fromString("[effects.surface_pressure]\nvalue = \"half\"\n", "test");
+  ConfigTable eff = bad.root().table("effects");
+  CHECK_THROWS_WITH_AS(makeEffects<2>(eff), doctest::Contains("normal_stress"), InputError);
+}

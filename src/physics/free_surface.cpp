@@ -36,7 +36,11 @@
 // the disorder lowers. Without a threshold the method runs no second sweep.
 //
 // Writes "number_density" (moving particles) and "free_surface" (1 on the surface, 0 inside;
-// all particles, walls 0), which the output stores. Used by the pressure gradient's mirrored
+// all particles, walls 0), which the output stores. When the scene has
+// [effects.surface_pressure], also "surface_normal" (moving particles, D components): the unit
+// outward normal n_i = -g_i/|g_i| with g_i = sum_j V_j grad_i W_ij over fluid and wall
+// neighbours (V_j = m_j/rho_j), the direction in which the support is empty; zero where
+// |g_i| < 1e-6/h (a full, symmetric support). Used by the pressure gradient's mirrored
 // zero-pressure treatment (thesis eq. 4.1, effects.pressure_gradient.free_surface_mirror) and by
 // the ISPH projection (p = 0 on the flagged particles, src/isph/projection.cpp).
 #include <cmath>
@@ -74,6 +78,10 @@ class FreeSurface final : public Effect<D> {
     density_ = &s.particles.fields.require("number_density", 1, Field::Range::moving);
     flag_ = &s.particles.fields.require("free_surface", 1, Field::Range::all);
     if (near_surface_) outermost_ = &s.particles.fields.require("free_surface_outermost", 1, Field::Range::moving);
+    if (s.find("surface_pressure")) {
+      normal_ = &s.particles.fields.require("surface_normal", D, Field::Range::moving);
+      normal_floor_ = 1e-6 / s.kernel.h;
+    }
     // n_ref: the lattice sum of W over a full support, spacing dx, the particle itself included.
     const double n = s.kernel.latticeSum(s.spacing);
     limit_ = threshold_ * n;
@@ -91,6 +99,7 @@ class FreeSurface final : public Effect<D> {
     flag_->data[i] = flag;
     // The second sweep decides only the particles that are not outermost and not too dense.
     if (near_surface_) outermost_->data[i] = flag;
+    if (normal_) storeNormal(ctx, i, moving, fixed);
   }
 
   // With method = "marrone" and a threshold: a particle whose number density is at most
@@ -112,6 +121,19 @@ class FreeSurface final : public Effect<D> {
 
  private:
   using Mat = Eigen::Matrix<double, D, D>;
+
+  // n_i = -g_i/|g_i|, g_i = sum_j V_j grad_i W_ij: grad_i W_ij = F_ij r_ij points from the
+  // neighbour towards i scaled by F < 0, so g_i points into the fluid.
+  void storeNormal(const RhsContext<D>& ctx, Index i, std::span<const Neighbour<D>> moving,
+                   std::span<const Neighbour<D>> fixed) const {
+    const ParticleSet<D>& p = ctx.particles;
+    Vec<D> g = Vec<D>::Zero();
+    for (const Neighbour<D>& nb : moving) g += (p.mass[nb.j] / p.density[nb.j] * nb.F) * nb.rij;
+    for (const Neighbour<D>& nb : fixed) g += (p.mass[nb.j] / p.density[nb.j] * nb.F) * nb.rij;
+    const double length = g.norm();
+    const Vec<D> n = length > normal_floor_ ? Vec<D>(-g / length) : Vec<D>::Zero();
+    for (int a = 0; a < D; ++a) normal_->data[D * i + a] = n[a];
+  }
 
   bool marroneSurface(const RhsContext<D>& ctx, std::span<const Neighbour<D>> moving,
                       std::span<const Neighbour<D>> fixed) const {
@@ -155,6 +177,8 @@ class FreeSurface final : public Effect<D> {
   Field* density_ = nullptr;
   Field* flag_ = nullptr;
   Field* outermost_ = nullptr;
+  Field* normal_ = nullptr;  // only with [effects.surface_pressure]
+  double normal_floor_ = 0;
 };
 
 }  // namespace

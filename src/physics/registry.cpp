@@ -20,7 +20,8 @@ namespace vesph {
   X(density_diffusion, makeDensityDiffusion, "delta-SPH density diffusion, Molteni & Colagrossi 2009 (delta, hydrostatic, walls)") \
   X(artificial_stress, makeArtificialStress, "artificial stress against the tensile instability, Fang et al. eqs. (38)-(44) (epsilon, exponent)") \
   X(particle_shifting, makeParticleShifting, "Fickian particle shifting as a velocity, Lind et al. 2012, Skillen et al. 2013 (coefficient, speed)") \
-  X(free_surface, makeFreeSurface, "free-surface particles: number density n_i <= threshold n_ref (thesis §4.2) or Marrone et al. 2010 (method = \"marrone\")")
+  X(free_surface, makeFreeSurface, "free-surface particles: number density n_i <= threshold n_ref (thesis §4.2) or Marrone et al. 2010 (method = \"marrone\")") \
+  X(surface_pressure, makeSurfacePressure, "WCSPH free-surface pressure p = n.T.n on the flagged particles, thesis §4.2 sigma.n = 0 (value, ambient_pressure)")
 
 #define VESPH_DECLARE(NAME, FN, SUMMARY) \
   template <int D>                       \

@@ -1,4 +1,4 @@
-# The stabilisers (artificial_viscosity, xsph, artificial_stress, particle_shifting) switched on in existing scenes
+# The stabilisers (artificial_viscosity, xsph, artificial_stress, particle_shifting; surface_pressure) switched on in existing scenes
 # by --set: each runs a short Poiseuille channel to the end with valid output, the artificial
 # stress also the Oldroyd-B channel (elastic stress on fluid and wall particles); `check` prints
 # their defaults; bad keys and missing prerequisites exit 2 with a message naming the key.
@@ -20,6 +20,7 @@ run_ok as "$S" --set 'effects.artificial_stress.epsilon=0.3' --set 'effects.equa
 run_ok all "$S" --set 'effects.artificial_viscosity={}' --set 'effects.xsph={}' --set 'effects.artificial_stress={}'
 run_ok as_oldroyd_b "$OB" --set 'effects.artificial_stress={}' --set 'effects.artificial_viscosity={}'
 run_ok shifting "$S" --set 'effects.particle_shifting.speed=0.01'
+run_ok surface_pressure_oldroyd_b "$OB" --set 'effects.free_surface={}' --set 'effects.surface_pressure={}'
 run_ok shifting_oldroyd_b "$OB" --set 'effects.particle_shifting.speed=0.01' --set 'effects.particle_shifting.coefficient=1.0'
 
 # defaults shown by check
@@ -32,7 +33,13 @@ for word in xsph artificial_stress particle_shifting; do
   grep -q "$word" "$WORK/out" && pass || fail "vesph list does not mention $word"
 done
 
+expect 0 "value = 'normal_stress'" -- "$VESPH" check "$OB" --set 'effects.free_surface={}' --set 'effects.surface_pressure={}'
+
 # bad keys
+expect 2 "effects.surface_pressure needs the free-surface flags and normals: add \[effects.free_surface\]" -- "$VESPH" check "$OB" --set 'effects.surface_pressure={}'
+expect 2 "for a Newtonian fluid set value = \"zero\"" -- "$VESPH" check "$S" --set 'effects.free_surface={}' --set 'effects.surface_pressure={}'
+expect 2 "the ISPH projection imposes its surface pressure itself" -- "$VESPH" check "$SRC/cases/poiseuille_newtonian_isph.toml" --set 'effects.free_surface={}' --set 'effects.surface_pressure={}'
+expect 2 "effects.surface_pressure.value: expected one of: normal_stress, zero" -- "$VESPH" check "$OB" --set 'effects.free_surface={}' --set 'effects.surface_pressure.value="half"'
 expect 2 "effects.artificial_viscosity.alpha: expected a non-negative number, got -1" -- "$VESPH" check "$S" --set effects.artificial_viscosity.alpha=-1
 expect 2 "effects.artificial_viscosity.beta: expected a non-negative number" -- "$VESPH" check "$S" --set effects.artificial_viscosity.beta=-2
 expect 2 "effects.xsph.epsilon: expected a number in \[0, 1\], got 1.5" -- "$VESPH" check "$S" --set effects.xsph.epsilon=1.5
