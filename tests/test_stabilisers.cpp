@@ -1104,6 +1104,16 @@ TEST_CASE("particle shifting: the free-surface band keeps only the tangential sh
 // ---------------------------------------------------------------------------------------------
 // Free-surface pressure of WCSPH (src/physics/surface_pressure.cpp)
 
+namespace {
+const std::string kOldroydB = "[effects.velocity_gradient]\n[effects.oldroyd_b]\nrelaxation_time = 0.1\npolymer_viscosity = 1.0\n";
+// 24 x 12 particles at rest on a lattice of spacing dx, compressed by 1 %; then Box::finish.
+void compressedBlock(Box<2>& b) {
+  for (int i = 0; i < 24; ++i)
+    for (int j = 0; j < 12; ++j) b.add(Vec<2>((i + 0.5) * b.dx, (j + 0.5) * b.dx), Vec<2>::Zero(), 1.01 * kRho0, b.mass());
+  b.finish();
+}
+}  // namespace
+
 TEST_CASE("surface pressure: flagged particles carry p = n.T.n (thesis §4.2 sigma.n = 0), the others the equation of state") {
   // A block at rest, 24 x 12 particles, compressed by 1 % (EOS pressure c^2 * 10 kg/m^3 = 1000 Pa),
   // carrying a uniform elastic stress S of an Oldroyd-B fluid (no solvent: T = S). The top
@@ -1111,13 +1121,9 @@ TEST_CASE("surface pressure: flagged particles carry p = n.T.n (thesis §4.2 sig
   // corners n.S.n of their diagonal normal; the interior keeps 1000 Pa.
   const double dx = 0.01, Sxx = 3000.0, Sxy = -700.0, Syy = -400.0;
   for (const bool zero : {false, true}) {
-    const std::string keys = std::string("[effects.velocity_gradient]\n[effects.oldroyd_b]\nrelaxation_time = 0.1\n"
-                                         "polymer_viscosity = 1.0\n[effects.free_surface]\n[effects.surface_pressure]\n") +
-                             (zero ? "value = \"zero\"\nambient_pressure = 50.0\n" : "");
-    Box<2> b(keys, dx, 1.6, KernelType::quintic, 40 * dx, false);
-    for (int i = 0; i < 24; ++i)
-      for (int j = 0; j < 12; ++j) b.add(Vec<2>((i + 0.5) * dx, (j + 0.5) * dx), Vec<2>::Zero(), 1.01 * kRho0, b.mass());
-    b.finish();
+    const std::string keys = std::string("[effects.free_surface]\n[effects.surface_pressure]\n") + (zero ? "value = \"zero\"\nambient_pressure = 50.0\n" : "");
+    Box<2> b(kOldroydB + keys, dx, 1.6, KernelType::quintic, 40 * dx, false);
+    compressedBlock(b);
     Field* S = b.sys.particles.fields.find("elastic_stress");
     REQUIRE(S);
     for (std::size_t k = 0; k < b.n(); ++k) {
@@ -1160,13 +1166,9 @@ TEST_CASE("surface pressure: flagged particles carry p = n.T.n (thesis §4.2 sig
   // out by sum_j m_j (p_i/rho_i^2 + p_j/rho_j^2) |grad W|; with p_i = 0 only the p_j term is
   // left, half the force (the flagged neighbours in the same row add nothing along y).
   const auto top_force = [&](bool with) {
-    const std::string keys = std::string("[effects.velocity_gradient]\n[effects.oldroyd_b]\nrelaxation_time = 0.1\n"
-                                         "polymer_viscosity = 1.0\n[effects.free_surface]\n[effects.pressure_gradient]\n") +
-                             (with ? "[effects.surface_pressure]\nvalue = \"zero\"\n" : "");
-    Box<2> b(keys, dx, 1.6, KernelType::quintic, 40 * dx, false);
-    for (int i = 0; i < 24; ++i)
-      for (int j = 0; j < 12; ++j) b.add(Vec<2>((i + 0.5) * dx, (j + 0.5) * dx), Vec<2>::Zero(), 1.01 * kRho0, b.mass());
-    b.finish();
+    const std::string keys = std::string("[effects.free_surface]\n[effects.pressure_gradient]\n") + (with ? "[effects.surface_pressure]\nvalue = \"zero\"\n" : "");
+    Box<2> b(kOldroydB + keys, dx, 1.6, KernelType::quintic, 40 * dx, false);
+    compressedBlock(b);
     b.evaluate();
     return b.dvdt(12 * 11 + 11)[1];  // particle (11, 11): the top row, mid-width (x-major order: k = 12 i + j)
   };
