@@ -14,6 +14,8 @@
 // state's pressure by p_s before the forces are taken: the pressure gradient then sees the
 // surface condition, as the ISPH projection's Dirichlet rows do. The density is left as the
 // continuity equation evolves it; only the pressure the forces read changes.
+// The wall particles' pressure is extrapolated from the fluid before this phase (the walls run
+// after the state phase), so walls beside a flagged particle see its equation-of-state value.
 //
 //   value = "normal_stress"  p_s = p_ambient + n.T.n (needs a constitutive model's extra stress)
 //   value = "zero"           p_s = p_ambient (the Newtonian-inviscid approximation of ISPH)
