@@ -27,6 +27,6 @@ for n in 10 25; do
     count=$((count + 1))
     "$VESPH" check "$f" >/dev/null 2>"$WORK/check.err" && pass || fail "vesph check $f: $(tail -2 "$WORK/check.err")"
   done
-  [ "$count" = 41 ] && pass || fail "die_swell_study wrote $count scenes at $n across, expected 41"
+  [ "$count" = 42 ] && pass || fail "die_swell_study wrote $count scenes at $n across, expected 42"
 done
 finish
