@@ -25,7 +25,9 @@ Per run
   -p + T_yy (zero on a free surface whose normal is y, thesis §4.1); and the band's particle
   count per unit length over the die's (counted from exit - 4 W over the whole number of
   spacings nearest 3.5 W): the swell of volume conservation at lattice spacing, honest where
-  the envelope counts voids or the particles crowd.
+  the envelope counts voids or the particles crowd. Then the outer rows' mean outward velocity
+  sign(y - W/2) u_y (> 0: moving away from the centreline, the jet widening there) and their
+  median T_xx (the stress along the flow that the exit releases).
 
 Exit status: 0; 1 for an unreadable file, a frame without pressure, or a 3D output; 2 for bad
 arguments.
@@ -44,12 +46,14 @@ import die_swell_measure as dsm  # noqa: E402
 from vesph_output import ToolError  # noqa: E402
 
 COLUMNS = ["run", "x0_m", "x1_m", "u_centre_m_s", "u_outer_m_s", "p_centre_Pa", "p_outer_Pa",
-           "T_yy_outer_Pa", "balance_outer_Pa", "count_ratio"]
+           "T_yy_outer_Pa", "balance_outer_Pa", "count_ratio", "v_outward_outer_m_s",
+           "T_xx_outer_Pa"]
 
 
 def frames_of(run, n):
     """The last n frames' fluid particles: position, velocity, pressure and, with a stress
-    field, T_yy (die_swell_measure's reader checks the shapes; the pressure is read here)."""
+    field, T_xx and T_yy (die_swell_measure's reader checks the shapes; the pressure is read
+    here)."""
     out = []
     for k in range(max(0, len(run.frames) - n), len(run.frames)):
         nm = run.frames[k][0]
@@ -61,7 +65,8 @@ def frames_of(run, n):
         d = {"position": fr["position"][fluid], "velocity": fr["velocity"][fluid],
              "pressure": g["pressure"][...][fluid]}
         if "extra_stress" in fr:
-            d["T_yy"] = fr["extra_stress"][fluid, 2]  # stored xx, xy, yy
+            d["T_xx"] = fr["extra_stress"][fluid, 0]  # stored xx, xy, yy
+            d["T_yy"] = fr["extra_stress"][fluid, 2]
         out.append(d)
     return out
 
@@ -104,10 +109,12 @@ def lip_rows(frames, dx, exit_x, W):
             outer = d > d.max() - 1.2 * dx
             u, p = fr["velocity"][m, 0], fr["pressure"][m]
             tyy = np.median(fr["T_yy"][m][outer]) if "T_yy" in fr else np.nan
+            txx = np.median(fr["T_xx"][m][outer]) if "T_xx" in fr else np.nan
             p_out = np.median(p[outer])
+            outward = np.sign(pos[m, 1] - 0.5 * W) * fr["velocity"][m, 1]
             acc.append((u[centre].mean() if centre.any() else np.nan, u[outer].mean(),
                         np.median(p[centre]) if centre.any() else np.nan, p_out, tyy, -p_out + tyy,
-                        np.count_nonzero(m) / (x1 - x0) / die_density))
+                        np.count_nonzero(m) / (x1 - x0) / die_density, outward[outer].mean(), txx))
         if acc:
             with warnings.catch_warnings():  # a column without values (T_yy, Newtonian) stays nan
                 warnings.simplefilter("ignore", RuntimeWarning)
@@ -148,11 +155,12 @@ def main(argv=None):
                     line += f" (plane Poiseuille {pois:.4g}: {100 * (g / pois - 1):+.0f} %)"
                 print(line)
                 print(f"   {'x0':>7} {'x1':>7} {'u_c':>6} {'u_out':>6} {'p_c':>9} {'p_out':>9} "
-                      f"{'Tyy_out':>9} {'-p+Tyy':>9} {'count':>6}")
+                      f"{'Tyy_out':>9} {'-p+Tyy':>9} {'count':>6} {'v_out':>6} {'Txx_out':>9}")
                 rows = lip_rows(frames, r.dx, exit_x, W)
                 for row in rows:
                     print(f"   {row[0]:7.4f} {row[1]:7.4f} {row[2]:6.2f} {row[3]:6.2f} {row[4]:9.0f} "
-                          f"{row[5]:9.0f} {row[6]:9.0f} {row[7]:9.0f} {row[8]:6.3f}")
+                          f"{row[5]:9.0f} {row[6]:9.0f} {row[7]:9.0f} {row[8]:6.3f} {row[9]:6.2f} "
+                          f"{row[10]:9.0f}")
                     table.append([label] + row)
                 curves[label] = np.array(rows)
             finally:

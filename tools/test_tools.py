@@ -2050,6 +2050,12 @@ def make_die_swell_lip_tests(tmp):
                 g = f["frames"][nm]
                 x = g["position"][:, 0]
                 g["pressure"][...] = np.where(x < DS_EXIT, G * (DS_EXIT - x), 0.0)
+                # beyond the exit: the rows move away from the centreline at 0.05 m/s and carry
+                # T_xx = -40 Pa
+                y = g["position"][:, 1]
+                beyond = x >= DS_EXIT
+                g["velocity"][beyond, 1] = np.sign(y[beyond] - 0.5 * DS_W) * 0.05
+                g["extra_stress"][beyond, 0] = -40.0
         out_csv = os.path.join(d, "lip.csv")
         rc, out, err = tool("die_swell_lip.py", h5, "--frames", "4", "--csv", out_csv)
         expect(rc == 0 and "-3.6e+04 Pa/m" in out and "+50 %" in out,
@@ -2062,6 +2068,9 @@ def make_die_swell_lip_tests(tmp):
         expect(all(abs(float(r["T_yy_outer_Pa"]) - 30.0) < 1e-9 and abs(float(r["p_outer_Pa"])) < 1e-9
                    and abs(float(r["balance_outer_Pa"]) - 30.0) < 1e-9 for r in far),
                f"outer rows: p 0, T_yy 30, balance 30: {far[:1]}")
+        expect(all(abs(float(r["v_outward_outer_m_s"]) - 0.05) < 1e-12
+                   and abs(float(r["T_xx_outer_Pa"]) + 40.0) < 1e-9 for r in far),
+               f"outer rows: outward velocity 0.05, T_xx -40: {far[:1]}")
         rc, out, err = tool("die_swell_lip.py", os.path.join(d, "missing.h5"))
         expect(rc == 1 and "die_swell_lip: error" in err, f"missing file: exit {rc}", out + err)
         rc, out, err = tool("die_swell_lip.py", h5, "--frames", "0")
