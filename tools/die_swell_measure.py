@@ -8,7 +8,7 @@ Usage
     /usr/bin/python3 tools/die_swell_measure.py RUN.h5
         [--stations 0.21 0.23 0.25] [--window 1.0] [--filled-window 4] [--die-width 0.01]
         [--die-exit 0.2]
-        [--from T] [--expect-min R] [--expect-max R]
+        [--from T] [--until T] [--expect-min R] [--expect-max R]
         [--profile-x 0.185] [--profile-time T] [--xlim 0.15 0.30]
         [--out-dir DIR] [--prefix NAME] [--no-png]
 
@@ -52,7 +52,8 @@ as a plug at U_e it is Q / (U_e W), the swell of volume conservation.
 Steady value
 ------------
 Over the frames with time >= --from T whose average is defined (default: the later half of
-the frames whose average is defined, i.e. frames n//2 ... n-1 of those n frames): the mean
+the frames whose average is defined, i.e. frames n//2 ... n-1 of those n frames), and with
+--until T only those with time <= T (to compare windows of two runs over the same times): the mean
 of the average ratio, its standard deviation (population, ddof = 0) and its half range
 (max - min)/2, and each station's mean and standard deviation over the same frames.
 --expect-min R / --expect-max R check that the steady mean lies in [R_min, R_max]; a failed
@@ -266,6 +267,10 @@ def steady(rows, a):
     else:
         win = defined[len(defined) // 2:]
         rule = "the later half of the frames with a defined average"
+    if a.to_time is not None:
+        # an upper end: windows of one run compared with another run's over the same times
+        win = [r for r in win if r["time"] <= a.to_time + 1e-12 * max(1.0, abs(a.to_time))]
+        rule += f", --until {a.to_time:g} s"
     nan = float("nan")
     res = {"rule": rule, "frames_used": len(win),
            "time_window": [win[0]["time"], win[-1]["time"]] if win else [nan, nan],
@@ -567,7 +572,7 @@ def run(a, out=sys.stdout):
             "average": {k2: st[k2] for k2 in ("mean", "std", "half_range", "min", "max")},
             "filled": st["filled"], "filled_window_dx": a.filled_window,
             "frames_used": st["frames_used"], "time_window_s": st["time_window"],
-            "from_s": a.from_time, "window_rule": st["rule"],
+            "from_s": a.from_time, "to_s": a.to_time, "window_rule": st["rule"],
             "profile": {"x_m": a.profile_x, "time_s": a.prof_t, "particles": len(prof),
                         "extra_stress": has_stress},
             "checks": checks, "notes": r.notes,
@@ -631,6 +636,9 @@ def main(argv=None):
     ap.add_argument("--from", dest="from_time", type=float, metavar="T",
                     help="steady window: frames with time >= T [s] (default: the later half "
                          "of the frames whose average is defined)")
+    ap.add_argument("--until", dest="to_time", type=float, metavar="T",
+                    help="steady window: only frames with time <= T [s] as well (default: to "
+                         "the last frame)")
     ap.add_argument("--expect-min", type=float, metavar="R",
                     help="check: steady mean swell ratio >= R (exit 1 otherwise)")
     ap.add_argument("--expect-max", type=float, metavar="R",
@@ -654,7 +662,8 @@ def main(argv=None):
             ap.error(f"{nm} must be a positive number, got {v:g}")
     for nm, v in [("--die-exit", a.die_exit), ("--profile-x", a.profile_x)] + [
             ("--stations", x) for x in a.stations] + [
-            (n2, v2) for n2, v2 in (("--from", a.from_time), ("--profile-time", a.profile_time),
+            (n2, v2) for n2, v2 in (("--from", a.from_time), ("--until", a.to_time),
+                                    ("--profile-time", a.profile_time),
                                     ("--expect-min", a.expect_min),
                                     ("--expect-max", a.expect_max)) if v2 is not None]:
         if not math.isfinite(v):

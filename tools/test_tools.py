@@ -1774,6 +1774,19 @@ def make_die_swell_tests(tmp):
         a = res["json"]["average"]
         expect(rc == 0 and res["json"]["frames_used"] == 6 and abs(a["mean"] - 1.2) < 1e-9,
                f"--from 0.3: exit {rc}, {res.get('json')}", out + err)
+        # --until: the window's upper end (the frame at 0.3 s alone: 29 rows, 29/25 = 1.16; the
+        # default later half, 0.6-0.8 s, cut at 0.7 s: two frames)
+        rc, out, err, res = measure(ve, "--from", "0.3", "--until", "0.35", "--no-png")
+        js = res.get("json", {})
+        expect(rc == 0 and js.get("frames_used") == 1 and abs(js["average"]["mean"] - 1.16) < 1e-9
+               and js["time_window_s"] == [0.3, 0.3] and js["to_s"] == 0.35,
+               f"--from 0.3 --until 0.35: exit {rc}, {js}", out + err)
+        rc, out, err, res = measure(ve, "--until", "0.7", "--no-png")
+        expect(rc == 0 and res["json"]["frames_used"] == 2
+               and abs(res["json"]["time_window_s"][1] - 0.7) < 1e-12,
+               f"--until 0.7: exit {rc}, {res.get('json')}", out + err)
+        rc, out, err, res = measure(ve, "--until", "nan", "--no-png")
+        expect(rc == 2 and "--until" in err, f"--until nan: exit {rc}", out + err)
 
     def voids_between_lanes():
         # The extrudate's rows two dx apart (lanes with voids between them): 15 rows span
