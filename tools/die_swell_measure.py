@@ -267,10 +267,10 @@ def steady(rows, a):
     else:
         win = defined[len(defined) // 2:]
         rule = "the later half of the frames with a defined average"
-    if a.to_time is not None:
+    if a.until_time is not None:
         # an upper end: windows of one run compared with another run's over the same times
-        win = [r for r in win if r["time"] <= a.to_time + 1e-12 * max(1.0, abs(a.to_time))]
-        rule += f", --until {a.to_time:g} s"
+        win = [r for r in win if r["time"] <= a.until_time + 1e-12 * max(1.0, abs(a.until_time))]
+        rule += f", --until {a.until_time:g} s"
     nan = float("nan")
     res = {"rule": rule, "frames_used": len(win),
            "time_window": [win[0]["time"], win[-1]["time"]] if win else [nan, nan],
@@ -572,7 +572,7 @@ def run(a, out=sys.stdout):
             "average": {k2: st[k2] for k2 in ("mean", "std", "half_range", "min", "max")},
             "filled": st["filled"], "filled_window_dx": a.filled_window,
             "frames_used": st["frames_used"], "time_window_s": st["time_window"],
-            "from_s": a.from_time, "to_s": a.to_time, "window_rule": st["rule"],
+            "from_s": a.from_time, "until_s": a.until_time, "window_rule": st["rule"],
             "profile": {"x_m": a.profile_x, "time_s": a.prof_t, "particles": len(prof),
                         "extra_stress": has_stress},
             "checks": checks, "notes": r.notes,
@@ -636,7 +636,7 @@ def main(argv=None):
     ap.add_argument("--from", dest="from_time", type=float, metavar="T",
                     help="steady window: frames with time >= T [s] (default: the later half "
                          "of the frames whose average is defined)")
-    ap.add_argument("--until", dest="to_time", type=float, metavar="T",
+    ap.add_argument("--until", dest="until_time", type=float, metavar="T",
                     help="steady window: only frames with time <= T [s] as well (default: to "
                          "the last frame)")
     ap.add_argument("--expect-min", type=float, metavar="R",
@@ -662,7 +662,7 @@ def main(argv=None):
             ap.error(f"{nm} must be a positive number, got {v:g}")
     for nm, v in [("--die-exit", a.die_exit), ("--profile-x", a.profile_x)] + [
             ("--stations", x) for x in a.stations] + [
-            (n2, v2) for n2, v2 in (("--from", a.from_time), ("--until", a.to_time),
+            (n2, v2) for n2, v2 in (("--from", a.from_time), ("--until", a.until_time),
                                     ("--profile-time", a.profile_time),
                                     ("--expect-min", a.expect_min),
                                     ("--expect-max", a.expect_max)) if v2 is not None]:

@@ -1779,7 +1779,7 @@ def make_die_swell_tests(tmp):
         rc, out, err, res = measure(ve, "--from", "0.3", "--until", "0.35", "--no-png")
         js = res.get("json", {})
         expect(rc == 0 and js.get("frames_used") == 1 and abs(js["average"]["mean"] - 1.16) < 1e-9
-               and js["time_window_s"] == [0.3, 0.3] and js["to_s"] == 0.35,
+               and js["time_window_s"] == [0.3, 0.3] and js["until_s"] == 0.35,
                f"--from 0.3 --until 0.35: exit {rc}, {js}", out + err)
         rc, out, err, res = measure(ve, "--until", "0.7", "--no-png")
         expect(rc == 0 and res["json"]["frames_used"] == 2
