@@ -104,14 +104,15 @@ def lip_rows(frames, dx, exit_x, W):
             m = (pos[:, 0] >= x0) & (pos[:, 0] < x1)
             if np.count_nonzero(m) < 2:
                 continue
-            d = np.abs(pos[m, 1] - 0.5 * W)
+            off = pos[m, 1] - 0.5 * W   # from the centreline
+            d = np.abs(off)
             centre = d < W / 5
             outer = d > d.max() - 1.2 * dx
             u, p = fr["velocity"][m, 0], fr["pressure"][m]
             tyy = np.median(fr["T_yy"][m][outer]) if "T_yy" in fr else np.nan
             txx = np.median(fr["T_xx"][m][outer]) if "T_xx" in fr else np.nan
             p_out = np.median(p[outer])
-            outward = np.sign(pos[m, 1] - 0.5 * W) * fr["velocity"][m, 1]
+            outward = np.sign(off) * fr["velocity"][m, 1]
             acc.append((u[centre].mean() if centre.any() else np.nan, u[outer].mean(),
                         np.median(p[centre]) if centre.any() else np.nan, p_out, tyy, -p_out + tyy,
                         np.count_nonzero(m) / (x1 - x0) / die_density, outward[outer].mean(), txx))
