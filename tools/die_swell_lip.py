@@ -27,7 +27,15 @@ Per run
   spacings nearest 3.5 W): the swell of volume conservation at lattice spacing, honest where
   the envelope counts voids or the particles crowd. Then the outer rows' mean outward velocity
   sign(y - W/2) u_y (> 0: moving away from the centreline, the jet widening there) and their
-  median T_xx (the stress along the flow that the exit releases).
+  median T_xx (the stress along the flow that the exit releases). Last, the band's momentum
+  flux along x per unit depth, J = sum_i V_i (rho_i u_i^2 + p_i - T_xx,i) / L (N/m; V_i =
+  m_i/rho_i, L the band's length; T = 0 where the output has no extra_stress, i.e. without
+  the viscous normal stress of a Newtonian run) and its momentum width Q^2 / (rho0 J) / W,
+  Q = sum_i m_i u_i / L the mass flux: in a free jet J and Q are conserved, and a plug at
+  rest pressure with flux Q and momentum flux J is Q^2 / (rho0 J) wide, so the bands past the
+  lip give the width the jet will settle to, and where J falls between the die and the jet
+  shows where the fluid is held back. rho0 is fluid.density of the stored scene. A line per
+  run gives the jet's mean momentum width over the bands from exit + W on.
 
 Exit status: 0; 1 for an unreadable file, a frame without pressure, or a 3D output; 2 for bad
 arguments.
@@ -47,7 +55,7 @@ from vesph_output import ToolError  # noqa: E402
 
 COLUMNS = ["run", "x0_m", "x1_m", "u_centre_m_s", "u_outer_m_s", "p_centre_Pa", "p_outer_Pa",
            "T_yy_outer_Pa", "balance_outer_Pa", "count_ratio", "v_outward_outer_m_s",
-           "T_xx_outer_Pa"]
+           "T_xx_outer_Pa", "momentum_flux_N_m", "momentum_width"]
 
 
 def frames_of(run, n):
@@ -64,6 +72,10 @@ def frames_of(run, n):
         fluid = fr["kind"] == 0
         d = {"position": fr["position"][fluid], "velocity": fr["velocity"][fluid],
              "pressure": g["pressure"][...][fluid]}
+        for key in ("mass", "density"):
+            if key not in g:
+                raise ToolError(f"{run.path}: frame {nm} has no {key}")
+            d[key] = g[key][...][fluid]
         if "extra_stress" in fr:
             d["T_xx"] = fr["extra_stress"][fluid, 0]  # stored xx, xy, yy
             d["T_yy"] = fr["extra_stress"][fluid, 2]
@@ -85,7 +97,7 @@ def die_gradient(frames, exit_x, W):
     return float(np.polyfit(x, p, 1)[0])
 
 
-def lip_rows(frames, dx, exit_x, W):
+def lip_rows(frames, dx, exit_x, W, rho0):
     # the die's particles per unit length over a whole number of spacings (a lattice puts the
     # same number of columns in every such window)
     length = max(1, round(3.5 * W / dx)) * dx
@@ -113,9 +125,15 @@ def lip_rows(frames, dx, exit_x, W):
             txx = np.median(fr["T_xx"][m][outer]) if "T_xx" in fr else np.nan
             p_out = np.median(p[outer])
             outward = np.sign(off) * fr["velocity"][m, 1]
+            mass = fr["mass"][m]
+            vol = mass / fr["density"][m]
+            t_xx = fr["T_xx"][m] if "T_xx" in fr else 0.0
+            flux_q = np.sum(mass * u) / (x1 - x0)
+            flux_j = np.sum(vol * (fr["density"][m] * u * u + p - t_xx)) / (x1 - x0)
             acc.append((u[centre].mean() if centre.any() else np.nan, u[outer].mean(),
                         np.median(p[centre]) if centre.any() else np.nan, p_out, tyy, -p_out + tyy,
-                        np.count_nonzero(m) / (x1 - x0) / die_density, outward[outer].mean(), txx))
+                        np.count_nonzero(m) / (x1 - x0) / die_density, outward[outer].mean(), txx,
+                        flux_j, flux_q * flux_q / (rho0 * flux_j) / W if flux_j > 0 else np.nan))
         if acc:
             with warnings.catch_warnings():  # a column without values (T_yy, Newtonian) stays nan
                 warnings.simplefilter("ignore", RuntimeWarning)
@@ -149,6 +167,9 @@ def main(argv=None):
                 label = f"{os.path.basename(os.path.dirname(os.path.abspath(path)))}/{name}"
                 g = die_gradient(frames, exit_x, W)
                 mu = (r.scene.get("fluid") or {}).get("viscosity")
+                rho0 = (r.scene.get("fluid") or {}).get("density")
+                if not rho0 or not rho0 > 0:
+                    raise ToolError(f"{path}: the stored scene has no fluid.density")
                 U = (r.scene.get("inflow") or {}).get("mean_velocity")
                 line = f"{label}: die dp/dx {g:.4g} Pa/m"
                 if mu and U:
@@ -156,13 +177,18 @@ def main(argv=None):
                     line += f" (plane Poiseuille {pois:.4g}: {100 * (g / pois - 1):+.0f} %)"
                 print(line)
                 print(f"   {'x0':>7} {'x1':>7} {'u_c':>6} {'u_out':>6} {'p_c':>9} {'p_out':>9} "
-                      f"{'Tyy_out':>9} {'-p+Tyy':>9} {'count':>6} {'v_out':>6} {'Txx_out':>9}")
-                rows = lip_rows(frames, r.dx, exit_x, W)
+                      f"{'Tyy_out':>9} {'-p+Tyy':>9} {'count':>6} {'v_out':>6} {'Txx_out':>9} "
+                      f"{'J':>7} {'W_J':>6}")
+                rows = lip_rows(frames, r.dx, exit_x, W, rho0)
                 for row in rows:
                     print(f"   {row[0]:7.4f} {row[1]:7.4f} {row[2]:6.2f} {row[3]:6.2f} {row[4]:9.0f} "
                           f"{row[5]:9.0f} {row[6]:9.0f} {row[7]:9.0f} {row[8]:6.3f} {row[9]:6.2f} "
-                          f"{row[10]:9.0f}")
+                          f"{row[10]:9.0f} {row[11]:7.1f} {row[12]:6.3f}")
                     table.append([label] + row)
+                jet = [row[12] for row in rows if row[0] >= exit_x + W - 1e-12 and np.isfinite(row[12])]
+                if jet:
+                    print(f"   jet (bands from x = {exit_x + W:g} m): momentum width "
+                          f"{np.mean(jet):.3f} W over {len(jet)} bands")
                 curves[label] = np.array(rows)
             finally:
                 r.close()

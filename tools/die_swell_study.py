@@ -5,7 +5,8 @@ command per study, each run a scene derived from cases/die_swell_second_order_fl
 Usage
 -----
     /usr/bin/python3 tools/die_swell_study.py STUDY [STUDY ...]
-        [--across N] [--scheme wcsph|isph] [--shifting A] [--room R] [--jobs J] [--out DIR] [--vesph PATH]
+        [--across N] [--scheme wcsph|isph] [--shifting A] [--room R] [--wall-floor P] [--jobs J]
+        [--out DIR] [--vesph PATH]
         [--only LABEL ...] [--dry-run] [--measure-only] [--no-png]
 
 STUDY is one of (thesis §4.4; v is the centreline velocity, De = |alpha1| v / (mu W),
@@ -76,6 +77,13 @@ files the runs under OUT/STUDY_shifting (OUT/STUDY_isph_shifting with --scheme i
 the run, so a strongly swelling extrudate (swell ratio near 2R) or a front that curls back
 over the die's outer faces needs more room: --room 3.5 (y from -0.03 to 0.04 m). Results go
 under OUT/STUDY_roomR (after the _isph/_shifting suffixes).
+
+--wall-floor P gives both die walls of every WCSPH run pressure_floor = P (Pa; docs/user-guide.md
+[[blocks]]): the walls take no pressure below P from the fluid. At 0 they push but never pull:
+the die's end face no longer holds back the extrudate's stretched surface rows within a kernel
+support of the lip (docs/studies.md §5, "The die's lip pulls"). ISPH runs solve their wall
+pressures and are left as they are (--scheme isph refuses the option; in wsph_isph it applies
+to the WCSPH run). Results go under OUT/STUDY_floorP (after the other suffixes).
 
 --dry-run writes the scenes and prints the commands without running them; --measure-only
 tabulates runs already present. --only LABEL restricts a study to the named runs.
@@ -199,10 +207,11 @@ def g6(x):
     return float(f"{x:.6g}")
 
 
-def scene_for(run, across, shifting=0.0, room=ROOM):
+def scene_for(run, across, shifting=0.0, room=ROOM, wall_floor=None):
     """The scene dict of a run: the base case with the run's parameters and resolution; with
     shifting > 0, particle shifting of that coefficient (speed: the feed's mean velocity); the
-    domain reaches room die widths above and below the die's centreline."""
+    domain reaches room die widths above and below the die's centreline; with wall_floor (Pa)
+    a WCSPH run's die walls take no pressure below it."""
     with open(BASE_CASE, "rb") as fh:
         s = tomllib.load(fh)
     s = copy.deepcopy(s)
@@ -216,6 +225,8 @@ def scene_for(run, across, shifting=0.0, room=ROOM):
     fluid["min"], fluid["max"] = [DIE_INLET, 0.0], [DIE_EXIT, W]
     lower["min"], lower["max"] = [DIE_INLET - depth, -depth], [DIE_EXIT, 0.0]
     upper["min"], upper["max"] = [DIE_INLET - depth, W], [DIE_EXIT, W + depth]
+    if wall_floor is not None and run.scheme == "wcsph":
+        lower["pressure_floor"] = upper["pressure_floor"] = float(wall_floor)
     inflow = s["inflow"]
     inflow["min"], inflow["max"] = [DIE_INLET - depth, 0.0], [DIE_INLET, W]
     scale = 6.8 / run.v
@@ -485,6 +496,9 @@ def main(argv=None):
                     help=f"domain half-height about the die's centreline in die widths (default "
                          f"{ROOM:g}: y from -0.01 to 0.02 m; results under OUT/STUDY_roomR "
                          f"otherwise)")
+    ap.add_argument("--wall-floor", type=float, default=None, metavar="P",
+                    help="pressure_floor P (Pa) on the die walls of every WCSPH run (0: walls that "
+                         "push but never pull; results under OUT/STUDY_floorP)")
     ap.add_argument("--jobs", type=int, default=max(1, os.cpu_count() or 1), metavar="J",
                     help="runs at once (each uses one core: set OMP_NUM_THREADS)")
     ap.add_argument("--out", default="out/die_swell_study", metavar="DIR")
@@ -503,6 +517,10 @@ def main(argv=None):
                  "must lie inside the domain)")
     if not (a.dry_run or a.measure_only) and not shutil.which(a.vesph) and not os.path.exists(a.vesph):
         ap.error(f"--vesph {a.vesph}: no such executable (build first: see README)")
+    if a.wall_floor is not None and not math.isfinite(a.wall_floor):
+        ap.error("--wall-floor must be a finite pressure (Pa)")
+    if a.wall_floor is not None and a.scheme == "isph":
+        ap.error("--wall-floor: ISPH runs solve their wall pressures (pressure_floor is WCSPH only)")
     if a.scheme == "isph" and "wsph_isph" in a.studies:
         ap.error("--scheme isph: the wsph_isph study already runs both schemes")
     status = 0
@@ -518,7 +536,8 @@ def main(argv=None):
                 ap.error(f"--only: no run of study {study} is named {sorted(unknown)}; "
                          f"its runs: {[r.label for r in study_runs(study)]}")
         name = study + ("_isph" if a.scheme == "isph" else "") + ("_shifting" if a.shifting > 0 else "") \
-            + (f"_room{a.room:g}" if a.room != ROOM else "")
+            + (f"_room{a.room:g}" if a.room != ROOM else "") \
+            + (f"_floor{a.wall_floor:g}" if a.wall_floor is not None else "")
         sd = os.path.join(a.out, name)
         todo = []
         for r in runs:
@@ -528,7 +547,7 @@ def main(argv=None):
                 with open(os.path.join(d, r.label + ".toml"), "w") as fh:
                     fh.write(f"# die_swell_study.py {name}: {r.label} (De = {r.De:.4g}, "
                              f"Re = {r.Re:.4g}, {a.across} across)\n")
-                    fh.write(toml_dumps(scene_for(r, a.across, a.shifting, a.room)) + "\n")
+                    fh.write(toml_dumps(scene_for(r, a.across, a.shifting, a.room, a.wall_floor)) + "\n")
             todo.append((r, d))
         if a.dry_run:
             for r, d in todo:

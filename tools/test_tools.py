@@ -1962,6 +1962,22 @@ def make_die_swell_study_tests(tmp):
                f"--room 3.5 --dry-run: exit {rc}", out + err)
         rc, out, err = tool("die_swell_study.py", "frontier", "--room", "1", "--dry-run", "--out", d)
         expect(rc == 2 and "--room" in err, f"--room 1: exit {rc}", err)
+        # --wall-floor: pressure_floor on both die walls of a WCSPH run, nothing else changes;
+        # an ISPH run (wsph_isph's) is left alone; --scheme isph refuses it.
+        sf = dss.scene_for(r, 10, wall_floor=0.0)
+        expect([b.get("pressure_floor") for b in sf["blocks"]] == [None, 0.0, 0.0]
+               and {k: v for k, v in sf.items() if k != "blocks"} == {k: v for k, v in s0.items() if k != "blocks"}
+               and [{k: v for k, v in b.items() if k != "pressure_floor"} for b in sf["blocks"]] == s0["blocks"],
+               f"--wall-floor: blocks {sf['blocks']}")
+        ri = [x for x in dss.study_runs("wsph_isph") if x.scheme == "isph"][0]
+        expect(all("pressure_floor" not in b for b in dss.scene_for(ri, 10, wall_floor=0.0)["blocks"]),
+               "--wall-floor: the ISPH run's walls were given a floor")
+        rc, out, err = tool("die_swell_study.py", "contraction", "--wall-floor", "0", "--dry-run", "--out", d)
+        expect(rc == 0 and os.path.exists(os.path.join(d, "contraction_floor0", "newtonian_a1_0", "newtonian_a1_0.toml")),
+               f"--wall-floor 0 --dry-run: exit {rc}", out + err)
+        rc, out, err = tool("die_swell_study.py", "contraction", "--scheme", "isph", "--wall-floor", "0",
+                            "--dry-run", "--out", d)
+        expect(rc == 2 and "--wall-floor" in err, f"--wall-floor with --scheme isph: exit {rc}", err)
         de = {v: sorted(round(r.De, 9) for r in dss.study_runs("deborah") if r.v == v)
               for v in (5.0, 10.0)}
         expect(de == {5.0: [0, 0.02, 0.1, 0.2, 0.3], 10.0: [0, 0.02, 0.1, 0.2, 0.3, 0.4, 0.5]},
@@ -2055,7 +2071,7 @@ def make_die_swell_lip_tests(tmp):
         # The synthetic die swell (25 rows in the die, 30 from 0.21 m on, T_yy = b = 30 Pa) with
         # a pressure falling linearly along the die at 1.5 times plane Poiseuille's gradient for
         # mu = 2 Pa s, U = 0.1 m/s (12 mu U / W^2 = 2.4e4 Pa/m) and p = 0 beyond the exit.
-        scene = DS_SCENE + "[fluid]\nviscosity = 2.0\n[inflow]\nmean_velocity = 0.1\n"
+        scene = DS_SCENE + "[fluid]\ndensity = 1000.0\nviscosity = 2.0\n[inflow]\nmean_velocity = 0.1\n"
         h5 = write_die_swell(os.path.join(d, "lip.h5"), scene=scene)
         G = 1.5 * 12 * 2.0 * 0.1 / DS_W ** 2
         with h5py.File(h5, "r+") as f:
@@ -2063,10 +2079,11 @@ def make_die_swell_lip_tests(tmp):
                 g = f["frames"][nm]
                 x = g["position"][:, 0]
                 g["pressure"][...] = np.where(x < DS_EXIT, G * (DS_EXIT - x), 0.0)
-                # beyond the exit: the rows move away from the centreline at 0.05 m/s and carry
-                # T_xx = -40 Pa
+                # beyond the exit: the rows move along at 0.08 m/s and away from the centreline
+                # at 0.05 m/s, and carry T_xx = -40 Pa
                 y = g["position"][:, 1]
                 beyond = x >= DS_EXIT
+                g["velocity"][beyond, 0] = 0.08
                 g["velocity"][beyond, 1] = np.sign(y[beyond] - 0.5 * DS_W) * 0.05
                 g["extra_stress"][beyond, 0] = -40.0
         out_csv = os.path.join(d, "lip.csv")
@@ -2084,6 +2101,14 @@ def make_die_swell_lip_tests(tmp):
         expect(all(abs(float(r["v_outward_outer_m_s"]) - 0.05) < 1e-12
                    and abs(float(r["T_xx_outer_Pa"]) + 40.0) < 1e-9 for r in far),
                f"outer rows: outward velocity 0.05, T_xx -40: {far[:1]}")
+        # momentum flux of 30 rows at u = 0.08 m/s, p = 0, T_xx = -40 Pa: J = 30 dx (rho u^2 + 40),
+        # Q = 30 dx rho u; momentum width Q^2 / (rho J) / W = 1.2 rho u^2 / (rho u^2 + 40)
+        j_exp = 30 * DS_DX * (1000.0 * 0.08 ** 2 + 40.0)
+        w_exp = 1.2 * 6.4 / 46.4
+        expect(all(abs(float(r["momentum_flux_N_m"]) - j_exp) < 1e-5 * j_exp     # the CSV's 6 digits
+                   and abs(float(r["momentum_width"]) - w_exp) < 1e-5 * w_exp for r in far),
+               f"momentum flux {j_exp:.6g} N/m, width {w_exp:.6g}: {[(r['momentum_flux_N_m'], r['momentum_width']) for r in far[:2]]}")
+        expect(f"momentum width {w_exp:.3f} W" in out, "the jet's momentum width line", out)
         rc, out, err = tool("die_swell_lip.py", os.path.join(d, "missing.h5"))
         expect(rc == 1 and "die_swell_lip: error" in err, f"missing file: exit {rc}", out + err)
         rc, out, err = tool("die_swell_lip.py", h5, "--frames", "0")

@@ -1,5 +1,10 @@
 #include "vesph/boundary/dummy_walls.hpp"
 
+#include <algorithm>
+#include <cmath>
+
+#include "vesph/core/types.hpp"
+
 namespace vesph {
 
 template <int D>
@@ -13,6 +18,10 @@ void DummyWalls<D>::setup(Setup<D>& s) {
   const std::size_t n0 = s.particles.n_moving;
   if (!points_.empty() && points_.size() != s.particles.size() - n0)
     throw std::logic_error("wall treatment given for a different number of fixed particles");
+  for (const WallPoint<D>& w : points_) any_floor_ = any_floor_ || std::isfinite(w.pressure_floor);
+  if (any_floor_ && !model_)
+    throw InputError("blocks: pressure_floor bounds the wall pressure extrapolated from the equation of state; "
+                     "the scene has none (add [effects.equation_of_state] or remove pressure_floor)");
   for (std::size_t k = 0; k < points_.size(); ++k)
     if (points_[k].image) {
       any_image_ = true;
@@ -104,6 +113,10 @@ void DummyWalls<D>::update(const RhsContext<D>& ctx, const NeighbourList<D>& lis
       for (int a = 0; a < D; ++a) out_v[a] = inflow ? p.velocity[D * w + a] : 2.0 * p.velocity[D * w + a] - sum_v[a] / sumW;
       if (pres) {
         pres[w] = (sum_p + sum_rho_gr) / sumW;
+        // A non-adhesive wall: a fluid in tension near it (a die's lip, where the extrudate's
+        // surface rows are stretched) would give it a negative pressure, and the symmetric
+        // pressure force would pull the fluid onto the wall.
+        if (any_floor_ && !inflow) pres[w] = std::max(pres[w], points_[w - n0].pressure_floor);
         p.density[w] = model_->densityFor(pres[w]);
       }
     } else {

@@ -101,10 +101,14 @@ Simulation<D>::Simulation(Config& config, const SceneHeader& header) : config_(c
   ConfigTable solver = root.table("solver");
   scheme_ = solver.choice("scheme", "wcsph", {"wcsph", "isph"});
   if (scheme_ == "isph") {
-    for (const WallPoint<D>& w : wall_points_)
+    for (const WallPoint<D>& w : wall_points_) {
       if (w.image)
         throw InputError(config_.file() + ": blocks: treatment = \"image\" walls are not implemented with solver.scheme = "
                          "\"isph\" (the projection extrapolates the wall pressure as for dummy layers); use treatment = \"dummy\"");
+      if (std::isfinite(w.pressure_floor))
+        throw InputError(config_.file() + ": blocks: pressure_floor is not implemented with solver.scheme = \"isph\" "
+                         "(the projection solves the wall pressures with the fluid's); remove it or use scheme = \"wcsph\"");
+    }
     // A prescribed inflow is a velocity inlet: for the pressure Poisson equation a Neumann
     // boundary like a wall, with the buffer's velocity in the divergence. The extrapolated
     // (pressure) inlet would need a Dirichlet pressure on the buffer, which the projection does
@@ -222,6 +226,7 @@ void Simulation<D>::generateParticles(ConfigTable& root) {
     int normal_axis = 0;     // image wall: its surface faces +-e_axis (into the fluid)
     double normal_sign = 1;
     bool centroid = false;   // image wall: extrapolate from the centroid of P's weights
+    double pressure_floor = -std::numeric_limits<double>::infinity();  // dummy wall, Pa
   };
   const Vec<D> v0 = root.table("initial").vector<D>("velocity", Vec<D>::Zero(), "m/s");
   std::vector<Box> boxes;
@@ -266,6 +271,14 @@ void Simulation<D>::generateParticles(ConfigTable& root) {
             "normal", "a coordinate unit vector pointing from the wall into the fluid, e.g. [0.0, 1.0] for a floor");
         box.centroid = b.choice("extrapolation", "fang", {"fang", "centroid"}) == "centroid";
       }
+      if (b.has("pressure_floor")) {
+        // A wall that pushes but does not pull (at 0): theory.md §6, the die's lip in
+        // docs/studies.md §5.
+        if (box.image) b.fail("pressure_floor", "no pressure_floor with treatment = \"image\" (dummy layers only)");
+        box.pressure_floor = b.number("pressure_floor", std::nullopt, Bound::any, "Pa");
+      }
+    } else if (b.has("pressure_floor")) {
+      b.fail("pressure_floor", "no pressure_floor on a fluid block (it bounds a wall's pressure)");
     }
     for (int a = 0; a < D; ++a) {
       const double L = box.hi[a] - box.lo[a];
@@ -379,15 +392,18 @@ void Simulation<D>::generateParticles(ConfigTable& root) {
           w.boundary = static_cast<Index>(first + static_cast<std::size_t>(kb));
           wall_points_.push_back(w);
         } else if (pass == ParticleKind::wall) {
-          wall_points_.push_back(WallPoint<D>{});
+          WallPoint<D> w;
+          w.pressure_floor = b.pressure_floor;
+          wall_points_.push_back(w);
         }
         p.add(Vec<D>(x + jitter(b)), b.velocity, rho0_, mass, pass, next_id++);
       }
     }
   if (p.n_moving == 0) root.fail("blocks", "at least one block of kind \"fluid\"");
-  // Scenes without image walls keep no per-wall-particle record (DummyWalls treats an empty
-  // one as all dummy layers).
-  if (std::none_of(wall_points_.begin(), wall_points_.end(), [](const WallPoint<D>& w) { return w.image; }))
+  // Scenes without image walls or pressure floors keep no per-wall-particle record
+  // (DummyWalls treats an empty one as all dummy layers without a floor).
+  if (std::none_of(wall_points_.begin(), wall_points_.end(),
+                   [](const WallPoint<D>& w) { return w.image || std::isfinite(w.pressure_floor); }))
     std::vector<WallPoint<D>>().swap(wall_points_);
 }
 

@@ -37,6 +37,7 @@
 // The extrapolated velocity is the wall particle's ghost velocity (field wall_velocity, used by
 // the viscous and velocity-gradient terms); the continuity equation sees the wall's own
 // velocity, as for the dummy layers.
+#include <limits>
 #include <vector>
 
 #include "vesph/boundary/boundary.hpp"
@@ -52,6 +53,9 @@ struct WallPoint {
   double depth = 0;             // behind the wall surface, m
   Index boundary = 0;           // the boundary particle of the column (particle index)
   bool centroid = false;        // extrapolate from the centroid of P's weights (below)
+  // Dummy layers: the extrapolated pressure is not allowed below this value (Pa; -inf: no
+  // floor). At 0 the wall pushes the fluid but never pulls it (docs/theory.md §6).
+  double pressure_floor = -std::numeric_limits<double>::infinity();
 };
 
 template <int D>
@@ -79,6 +83,7 @@ class DummyWalls final : public Boundary<D> {
   std::vector<Index> images_;     // the image particles (depth > 0), particle indices
   std::vector<char> is_stress_;   // per interpolated field: a stress tensor (n.S.n = 0 on the wall)
   bool any_image_ = false;
+  bool any_floor_ = false;        // some wall particle has a finite pressure_floor
   bool ambient_inlet_ = false;
 
   double interpolateFields(ParticleSet<D>& p, Index w, std::span<const Neighbour<D>> fluid) const;
