@@ -35,7 +35,7 @@ Per run
   rest pressure with flux Q and momentum flux J is Q^2 / (rho0 J) wide, so the bands past the
   lip give the width the jet will settle to, and where J falls between the die and the jet
   shows where the fluid is held back. rho0 is fluid.density of the stored scene. A line per
-  run gives the jet's mean momentum width over the bands from exit + W on.
+  run gives the jet's mean momentum flux and width over the bands from exit + W on.
 
 Exit status: 0; 1 for an unreadable file, a frame without pressure, or a 3D output; 2 for bad
 arguments.
@@ -185,10 +185,11 @@ def main(argv=None):
                           f"{row[5]:9.0f} {row[6]:9.0f} {row[7]:9.0f} {row[8]:6.3f} {row[9]:6.2f} "
                           f"{row[10]:9.0f} {row[11]:7.1f} {row[12]:6.3f}")
                     table.append([label] + row)
-                jet = [row[12] for row in rows if row[0] >= exit_x + W - 1e-12 and np.isfinite(row[12])]
+                jet = [row for row in rows if row[0] >= exit_x + W - 1e-12 and np.isfinite(row[12])]
                 if jet:
-                    print(f"   jet (bands from x = {exit_x + W:g} m): momentum width "
-                          f"{np.mean(jet):.3f} W over {len(jet)} bands")
+                    print(f"   jet (bands from x = {exit_x + W:g} m): momentum flux "
+                          f"{np.mean([row[11] for row in jet]):.1f} N/m, momentum width "
+                          f"{np.mean([row[12] for row in jet]):.3f} W over {len(jet)} bands")
                 curves[label] = np.array(rows)
             finally:
                 r.close()

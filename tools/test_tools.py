@@ -2108,7 +2108,8 @@ def make_die_swell_lip_tests(tmp):
         expect(all(abs(float(r["momentum_flux_N_m"]) - j_exp) < 1e-5 * j_exp     # the CSV's 6 digits
                    and abs(float(r["momentum_width"]) - w_exp) < 1e-5 * w_exp for r in far),
                f"momentum flux {j_exp:.6g} N/m, width {w_exp:.6g}: {[(r['momentum_flux_N_m'], r['momentum_width']) for r in far[:2]]}")
-        expect(f"momentum width {w_exp:.3f} W" in out, "the jet's momentum width line", out)
+        expect(f"momentum flux {j_exp:.1f} N/m, momentum width {w_exp:.3f} W" in out,
+               "the jet's momentum flux and width line", out)
         rc, out, err = tool("die_swell_lip.py", os.path.join(d, "missing.h5"))
         expect(rc == 1 and "die_swell_lip: error" in err, f"missing file: exit {rc}", out + err)
         rc, out, err = tool("die_swell_lip.py", h5, "--frames", "0")
