@@ -143,6 +143,22 @@ def lip_rows(frames, dx, exit_x, W, rho0):
     return rows
 
 
+def run_labels(paths):
+    """A label per run: its directory and file name (without .h5), with as many directories
+    above as it takes to tell the runs apart (the studies give runs of the same name in
+    different study directories); a file given twice is numbered."""
+    parts = [os.path.splitext(os.path.abspath(p))[0].split(os.sep) for p in paths]
+    depth = 2
+    while depth < max(len(q) for q in parts) and len({"/".join(q[-depth:]) for q in parts}) < len(parts):
+        depth += 1
+    labels, seen = [], {}
+    for q in parts:
+        label = "/".join(q[-depth:])
+        seen[label] = seen.get(label, 0) + 1
+        labels.append(label if seen[label] == 1 else f"{label}#{seen[label]}")
+    return labels
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(prog="die_swell_lip.py", description=__doc__.split("\n")[0])
     ap.add_argument("paths", nargs="+", metavar="RUN.h5")
@@ -157,14 +173,15 @@ def main(argv=None):
     if not (a.die_width > 0):
         ap.error("--die-width must be > 0")
     W, exit_x = a.die_width, a.die_exit
-    table, curves = [], {}
+    table, curves, table_labels = [], {}, []
+    labels = run_labels(a.paths)
     try:
         for path in a.paths:
             r = dsm.Run(path)
             try:
                 frames = frames_of(r, a.frames)
-                name = os.path.splitext(os.path.basename(path))[0]
-                label = f"{os.path.basename(os.path.dirname(os.path.abspath(path)))}/{name}"
+                label = labels[len(table_labels)]
+                table_labels.append(label)
                 g = die_gradient(frames, exit_x, W)
                 mu = (r.scene.get("fluid") or {}).get("viscosity")
                 rho0 = (r.scene.get("fluid") or {}).get("density")
@@ -207,26 +224,32 @@ def main(argv=None):
         import matplotlib
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
-        fig, ax = plt.subplots(1, 3, figsize=(13, 3.8))
+        # One colour per run (the legend below the panels); the line style tells the
+        # quantity (the panels' titles).
+        fig, ax = plt.subplots(1, 3, figsize=(13, 3.6 + 0.22 * len(curves)))
         for k, (label, c) in enumerate(curves.items()):
             xm = 0.5 * (c[:, 0] + c[:, 1])
             col = f"C{k}"
-            ax[0].plot(xm, c[:, 2], "-", color=col, label=f"{label} centre")
-            ax[0].plot(xm, c[:, 3], "--", color=col, label=f"{label} outer rows")
-            ax[1].plot(xm, c[:, 4] / 1e3, "-", color=col, label=f"{label} centre")
-            ax[1].plot(xm, c[:, 5] / 1e3, "--", color=col, label=f"{label} outer rows")
-            ax[1].plot(xm, c[:, 6] / 1e3, ":", color=col, label=f"{label} T_yy outer")
-            ax[2].plot(xm, c[:, 8], "-", color=col, label=label)
-        for axis, yl in zip(ax, ("u_x [m/s]", "p, T_yy [kPa]", "count per length / die's")):
+            ax[0].plot(xm, c[:, 2], "-", color=col, label=label)
+            ax[0].plot(xm, c[:, 3], "--", color=col)
+            ax[1].plot(xm, c[:, 4] / 1e3, "-", color=col)
+            ax[1].plot(xm, c[:, 5] / 1e3, "--", color=col)
+            ax[1].plot(xm, c[:, 6] / 1e3, ":", color=col)
+            ax[2].plot(xm, c[:, 8], "-", color=col)
+            ax[2].plot(xm, c[:, 12], "--", color=col)
+        titles = ("u_x: centre (solid), outer rows (dashed)",
+                  "p: centre (solid), outer rows (dashed);\nT_yy of the outer rows (dotted)",
+                  "count per length / die's (solid);\nmomentum width Q²/(ρ0 J) / W (dashed)")
+        for axis, yl, title in zip(ax, ("u_x [m/s]", "p, T_yy [kPa]", "width / W"), titles):
             axis.axvline(exit_x, color="k", lw=0.8)
             axis.set_xlabel("x [m]")
             axis.set_ylabel(yl)
+            axis.set_title(title, fontsize=8)
             axis.grid(alpha=0.3)
-        ax[0].legend(fontsize=7)
-        ax[1].legend(fontsize=6)
-        ax[2].legend(fontsize=7)
         fig.suptitle(f"the flow at the die's lip (mean of the last {a.frames} frames)", fontsize=10)
-        fig.tight_layout()
+        handles, names = ax[0].get_legend_handles_labels()
+        fig.legend(handles, names, loc="lower center", ncol=1, fontsize=7, frameon=False)
+        fig.tight_layout(rect=(0, 0.06 * len(curves), 1, 1))
         fig.savefig(a.png, dpi=110)
         print(f"wrote {a.png}")
     return 0

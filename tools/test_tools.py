@@ -2115,7 +2115,20 @@ def make_die_swell_lip_tests(tmp):
         rc, out, err = tool("die_swell_lip.py", h5, "--frames", "0")
         expect(rc == 2, f"--frames 0: exit {rc}", out + err)
 
-    return [("die_swell_lip: die pressure gradient against Poiseuille, bands past the exit", lip_table)]
+    def lip_labels():
+        # Runs of the same name in different study directories keep apart (the plot's curves
+        # and the CSV are keyed by the label); the same file twice is numbered.
+        sys.path.insert(0, HERE)
+        import die_swell_lip as dsl
+        got = dsl.run_labels(["out/a/s1/r/r.h5", "out/a/s2/r/r.h5", "out/b/q/q.h5"])
+        expect(got == ["s1/r/r", "s2/r/r", "b/q/q"], f"labels {got}, expected one directory more for all")
+        got = dsl.run_labels(["x/r/r.h5", "y/q/q.h5"])
+        expect(got == ["r/r", "q/q"], f"labels {got}, expected the directory and name only")
+        got = dsl.run_labels(["x/r/r.h5", "x/r/r.h5"])
+        expect(len(set(got)) == 2 and got[1].endswith("#2"), f"the same file twice: {got}")
+
+    return [("die_swell_lip: die pressure gradient against Poiseuille, bands past the exit", lip_table),
+            ("die_swell_lip: run labels tell runs of the same name apart", lip_labels)]
 
 
 def main():
