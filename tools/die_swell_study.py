@@ -5,8 +5,8 @@ command per study, each run a scene derived from cases/die_swell_second_order_fl
 Usage
 -----
     /usr/bin/python3 tools/die_swell_study.py STUDY [STUDY ...]
-        [--across N] [--scheme wcsph|isph] [--shifting A] [--room R] [--wall-floor P] [--jobs J]
-        [--out DIR] [--vesph PATH]
+        [--across N] [--scheme wcsph|isph] [--shifting A] [--room R] [--wall-floor P]
+        [--surface-condition] [--jobs J] [--out DIR] [--vesph PATH]
         [--only LABEL ...] [--dry-run] [--measure-only] [--no-png]
 
 STUDY is one of (thesis §4.4; v is the centreline velocity, De = |alpha1| v / (mu W),
@@ -84,6 +84,12 @@ the die's end face no longer holds back the extrudate's stretched surface rows w
 support of the lip (docs/studies.md §5, "The die's lip pulls"). ISPH runs solve their wall
 pressures and are left as they are (--scheme isph refuses the option; in wsph_isph it applies
 to the WCSPH run). Results go under OUT/STUDY_floorP (after the other suffixes).
+
+--surface-condition gives every WCSPH run the free surface's normal stress balance,
+[effects.surface_pressure] (p = n.T.n on the flagged particles, thesis §4.2; theory.md §5.12),
+with the ISPH scene's flags ([effects.free_surface] threshold 0.97, where p = 0 is imposed in
+ISPH): the two conditions ISPH has at the lip and WCSPH lacks. ISPH runs are left alone (not
+with --scheme isph). Results go under OUT/STUDY_sp (last suffix).
 
 --dry-run writes the scenes and prints the commands without running them; --measure-only
 tabulates runs already present. --only LABEL restricts a study to the named runs.
@@ -207,11 +213,12 @@ def g6(x):
     return float(f"{x:.6g}")
 
 
-def scene_for(run, across, shifting=0.0, room=ROOM, wall_floor=None):
+def scene_for(run, across, shifting=0.0, room=ROOM, wall_floor=None, surface=False):
     """The scene dict of a run: the base case with the run's parameters and resolution; with
     shifting > 0, particle shifting of that coefficient (speed: the feed's mean velocity); the
     domain reaches room die widths above and below the die's centreline; with wall_floor (Pa)
-    a WCSPH run's die walls take no pressure below it."""
+    a WCSPH run's die walls take no pressure below it; with surface, a WCSPH run imposes the
+    free surface's normal stress balance on particles flagged at threshold 0.97."""
     with open(BASE_CASE, "rb") as fh:
         s = tomllib.load(fh)
     s = copy.deepcopy(s)
@@ -271,6 +278,11 @@ def scene_for(run, across, shifting=0.0, room=ROOM, wall_floor=None):
         # ISPH scenes have them already.
         e.setdefault("free_surface", {"threshold": 0.8})
         e["particle_shifting"] = {"coefficient": g6(shifting), "speed": g6(run.v / 1.5)}
+    if surface and run.scheme == "wcsph":
+        # The ISPH scene's flags (its p = 0 rows): the particles at the lip, whose supports
+        # the die's wall fills, are flagged at 0.97 and not at 0.8 (docs/studies.md §5).
+        e.setdefault("free_surface", {})["threshold"] = 0.97
+        e["surface_pressure"] = {}
     s["integrator"] = {"type": run.integrator}
     s["time"] = {"end": g6(0.045 * scale * run.duration)}
     s["output"] = {"interval": g6(0.002 * scale)}
@@ -499,6 +511,9 @@ def main(argv=None):
     ap.add_argument("--wall-floor", type=float, default=None, metavar="P",
                     help="pressure_floor P (Pa) on the die walls of every WCSPH run (0: walls that "
                          "push but never pull; results under OUT/STUDY_floorP)")
+    ap.add_argument("--surface-condition", action="store_true",
+                    help="every WCSPH run imposes the free surface's normal stress balance "
+                         "([effects.surface_pressure], flags at 0.97; results under OUT/STUDY_sp)")
     ap.add_argument("--jobs", type=int, default=max(1, os.cpu_count() or 1), metavar="J",
                     help="runs at once (each uses one core: set OMP_NUM_THREADS)")
     ap.add_argument("--out", default="out/die_swell_study", metavar="DIR")
@@ -519,6 +534,8 @@ def main(argv=None):
         ap.error(f"--vesph {a.vesph}: no such executable (build first: see README)")
     if a.wall_floor is not None and not math.isfinite(a.wall_floor):
         ap.error("--wall-floor must be a finite pressure (Pa)")
+    if a.surface_condition and a.scheme == "isph":
+        ap.error("--surface-condition: ISPH runs impose p = 0 on their flagged particles already")
     if a.wall_floor is not None and a.scheme == "isph":
         ap.error("--wall-floor: ISPH runs solve their wall pressures (pressure_floor is WCSPH only)")
     if a.scheme == "isph" and "wsph_isph" in a.studies:
@@ -537,7 +554,8 @@ def main(argv=None):
                          f"its runs: {[r.label for r in study_runs(study)]}")
         name = study + ("_isph" if a.scheme == "isph" else "") + ("_shifting" if a.shifting > 0 else "") \
             + (f"_room{a.room:g}" if a.room != ROOM else "") \
-            + (f"_floor{a.wall_floor:g}" if a.wall_floor is not None else "")
+            + (f"_floor{a.wall_floor:g}" if a.wall_floor is not None else "") \
+            + ("_sp" if a.surface_condition else "")
         sd = os.path.join(a.out, name)
         todo = []
         for r in runs:
@@ -547,7 +565,8 @@ def main(argv=None):
                 with open(os.path.join(d, r.label + ".toml"), "w") as fh:
                     fh.write(f"# die_swell_study.py {name}: {r.label} (De = {r.De:.4g}, "
                              f"Re = {r.Re:.4g}, {a.across} across)\n")
-                    fh.write(toml_dumps(scene_for(r, a.across, a.shifting, a.room, a.wall_floor)) + "\n")
+                    fh.write(toml_dumps(scene_for(r, a.across, a.shifting, a.room, a.wall_floor,
+                                                  a.surface_condition)) + "\n")
             todo.append((r, d))
         if a.dry_run:
             for r, d in todo:

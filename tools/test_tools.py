@@ -1978,6 +1978,23 @@ def make_die_swell_study_tests(tmp):
         rc, out, err = tool("die_swell_study.py", "contraction", "--scheme", "isph", "--wall-floor", "0",
                             "--dry-run", "--out", d)
         expect(rc == 2 and "--wall-floor" in err, f"--wall-floor with --scheme isph: exit {rc}", err)
+        # --surface-condition: [effects.surface_pressure] with the ISPH scene's flags (0.97) in a
+        # WCSPH run, also over the shifting's 0.8; the ISPH run untouched; --scheme isph refuses.
+        for shift in (0.0, 1.0):
+            ss = dss.scene_for(r, 10, shifting=shift, surface=True)
+            expect(ss["effects"].get("surface_pressure") == {}
+                   and ss["effects"]["free_surface"]["threshold"] == 0.97,
+                   f"--surface-condition (shifting {shift}): {ss['effects'].get('free_surface')}")
+        si = dss.scene_for(ri, 10, surface=True)
+        expect("surface_pressure" not in si["effects"] and si["effects"]["free_surface"] == {"threshold": 0.97},
+               f"--surface-condition changed the ISPH run: {si['effects'].get('free_surface')}")
+        rc, out, err = tool("die_swell_study.py", "contraction", "--wall-floor", "0", "--surface-condition",
+                            "--dry-run", "--out", d)
+        expect(rc == 0 and os.path.exists(os.path.join(d, "contraction_floor0_sp", "newtonian_a1_0", "newtonian_a1_0.toml")),
+               f"--surface-condition --dry-run: exit {rc}", out + err)
+        rc, out, err = tool("die_swell_study.py", "contraction", "--scheme", "isph", "--surface-condition",
+                            "--dry-run", "--out", d)
+        expect(rc == 2 and "--surface-condition" in err, f"--surface-condition with --scheme isph: exit {rc}", err)
         de = {v: sorted(round(r.De, 9) for r in dss.study_runs("deborah") if r.v == v)
               for v in (5.0, 10.0)}
         expect(de == {5.0: [0, 0.02, 0.1, 0.2, 0.3], 10.0: [0, 0.02, 0.1, 0.2, 0.3, 0.4, 0.5]},
