@@ -126,10 +126,10 @@ def lip_rows(frames, dx, exit_x, W, rho0):
             p_out = np.median(p[outer])
             outward = np.sign(off) * fr["velocity"][m, 1]
             mass = fr["mass"][m]
-            vol = mass / fr["density"][m]
             t_xx = fr["T_xx"][m] if "T_xx" in fr else 0.0
             flux_q = np.sum(mass * u) / (x1 - x0)
-            flux_j = np.sum(vol * (fr["density"][m] * u * u + p - t_xx)) / (x1 - x0)
+            # V_i (rho_i u_i^2 + p_i - T_xx,i) with V_i rho_i = m_i
+            flux_j = np.sum(mass * u * u + mass / fr["density"][m] * (p - t_xx)) / (x1 - x0)
             acc.append((u[centre].mean() if centre.any() else np.nan, u[outer].mean(),
                         np.median(p[centre]) if centre.any() else np.nan, p_out, tyy, -p_out + tyy,
                         np.count_nonzero(m) / (x1 - x0) / die_density, outward[outer].mean(), txx,
@@ -173,15 +173,12 @@ def main(argv=None):
     if not (a.die_width > 0):
         ap.error("--die-width must be > 0")
     W, exit_x = a.die_width, a.die_exit
-    table, curves, table_labels = [], {}, []
-    labels = run_labels(a.paths)
+    table, curves = [], {}
     try:
-        for path in a.paths:
+        for path, label in zip(a.paths, run_labels(a.paths)):
             r = dsm.Run(path)
             try:
                 frames = frames_of(r, a.frames)
-                label = labels[len(table_labels)]
-                table_labels.append(label)
                 g = die_gradient(frames, exit_x, W)
                 mu = (r.scene.get("fluid") or {}).get("viscosity")
                 rho0 = (r.scene.get("fluid") or {}).get("density")
