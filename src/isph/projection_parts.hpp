@@ -1,7 +1,7 @@
 #pragma once
 // The pieces of the ISPH projection (include/vesph/isph/projection.hpp; docs/architecture.md
-// "ISPH projection"), private to src/isph: the strategies chosen at setup from [solver] and
-// the operators the projection composes.
+// "ISPH projection"), private to src/isph: the operators the projection composes, which
+// carry out the strategies it chose from [solver] (the enums of projection.hpp).
 //   PressureUnknowns     which fluid particles carry an unknown (src/isph/pressure_system.cpp)
 //   GradientRows         the pressure gradient G as rows over the neighbour list (same file)
 //   PressureSystem       the assembled pressure equation (same file)
@@ -9,7 +9,8 @@
 //                        source divergence (src/isph/wall_conditions.cpp)
 //   DivergenceCleaning   the optional exact projection after the pressure correction
 //                        (src/isph/divergence_cleaning.cpp)
-// They take the hook's `sys` and read only its particles, kernel, domain, neighbours and driver.
+// They take the hook's `sys` and read only its particles, kernel, domain, neighbours and driver
+// (the projection itself adds unpack, evaluate and size).
 #include <memory>
 #include <optional>
 #include <vector>
