@@ -9,6 +9,7 @@
 
 #include "vesph/sim/simulation.hpp"
 #include "vesph/time/integrator.hpp"
+#include "vesph/time/integrator_factory.hpp"
 
 using namespace vesph;
 

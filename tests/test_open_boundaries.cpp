@@ -1,4 +1,4 @@
-// Particle-count changes between steps (inflow, outflow; DESIGN.md "Particle count may change
+// Particle-count changes between steps (inflow, outflow; docs/architecture.md "Particle count may change
 // during a run"): the particle set's remap of arrays and fields, and every integrator going on
 // correctly after its state was resized mid-run (ARKODE through ERKStepResize).
 #include <doctest/doctest.h>
@@ -10,6 +10,7 @@
 #include "vesph/core/particles.hpp"
 #include "vesph/io/config.hpp"
 #include "vesph/time/integrator.hpp"
+#include "vesph/time/integrator_factory.hpp"
 
 using namespace vesph;
 

@@ -21,6 +21,7 @@
 #include "vesph/sim/simulation.hpp"
 #include "vesph/sim/system.hpp"
 #include "vesph/time/integrator.hpp"
+#include "vesph/time/integrator_factory.hpp"
 
 using namespace vesph;
 

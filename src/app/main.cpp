@@ -1,4 +1,4 @@
-// The `vesph` command (DESIGN.md "Command line"):
+// The `vesph` command (docs/user-guide.md §2 "Command line"):
 //   vesph run SCENE.toml [-o DIR] [--set KEY=VALUE]... [--quiet] [--resume]
 //   vesph check SCENE.toml [--set KEY=VALUE]...
 //   vesph list
@@ -18,6 +18,7 @@
 #include "vesph/physics/registry.hpp"
 #include "vesph/isph/linear_solver.hpp"
 #include "vesph/sim/simulation.hpp"
+#include "vesph/time/integrator_factory.hpp"
 
 using namespace vesph;
 

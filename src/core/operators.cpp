@@ -1,6 +1,6 @@
 #include "vesph/core/operators.hpp"
 
-#include "vesph/physics/pair_driver.hpp"
+#include "vesph/core/pair_loop.hpp"
 
 #include <cmath>
 #include <stdexcept>
@@ -21,16 +21,16 @@ void checkInputs(const char* op, const ParticleSet<D>& p, const NeighbourList<D>
 }
 
 // Calls fn(i, j, rij, F) for every neighbour j of every moving particle i (moving ones, then
-// fixed) inside the kernel support, through the pair driver: the one neighbour loop of vesph.
+// fixed) inside the kernel support, through the one neighbour loop of vesph (core/pair_loop.hpp).
 template <int D, class Fn>
 void forPairs(const ParticleSet<D>& p, const NeighbourList<D>& list, const Kernel& kernel,
               const Domain<D>& domain, Fn&& fn) {
-  PairDriver<D> driver;
-  driver.forEachMoving(p, kernel, domain, list, false,
-                       [&](Index i, std::span<const Neighbour<D>> moving, std::span<const Neighbour<D>> fixed) {
-                         for (const Neighbour<D>& nb : moving) fn(i, nb.j, nb.rij, nb.F);
-                         for (const Neighbour<D>& nb : fixed) fn(i, nb.j, nb.rij, nb.F);
-                       });
+  PairLoop<D> loop;
+  loop.forEachMoving(p, kernel, domain, list, false,
+                     [&](Index i, std::span<const Neighbour<D>> moving, std::span<const Neighbour<D>> fixed) {
+                       for (const Neighbour<D>& nb : moving) fn(i, nb.j, nb.rij, nb.F);
+                       for (const Neighbour<D>& nb : fixed) fn(i, nb.j, nb.rij, nb.F);
+                     });
 }
 
 }  // namespace

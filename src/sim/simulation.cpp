@@ -16,6 +16,7 @@
 #include "vesph/io/progress.hpp"
 #include "vesph/isph/projection.hpp"
 #include "vesph/physics/registry.hpp"
+#include "vesph/time/integrator_factory.hpp"
 
 namespace vesph {
 
@@ -123,7 +124,10 @@ Simulation<D>::Simulation(Config& config, const SceneHeader& header) : config_(c
                        "(threshold = 0.97): the open ends are free surfaces with p = 0");
     if ((!flow || !flow->hasBuffer()) && solver.has("inlet_condition"))
       solver.fail("inlet_condition", "only with a prescribed [inflow] (the condition is the buffer's)");
-    system_.hooks.push_back(makeProjection<D>(solver));
+    // The velocity inlet's direction, from the prescribed inflow buffer (it does not change).
+    std::optional<Vec<D>> inflow_direction;
+    if (flow && flow->hasBuffer()) inflow_direction = flow->flowDirection();
+    system_.hooks.push_back(makeProjection<D>(solver, inflow_direction));
   } else {
     for (const std::string& key : solver.keys())
       if (key != "scheme") solver.fail(key, "no " + key + " with scheme = \"wcsph\" (the linear-solver keys belong to scheme = \"isph\")");
@@ -132,7 +136,7 @@ Simulation<D>::Simulation(Config& config, const SceneHeader& header) : config_(c
   // A prescribed inflow knows the flow's speed: the velocity scale for default tolerances when
   // no sound-speed rule gives one (ISPH scenes).
   const double inflow_speed = flow ? flow->prescribedPeakSpeed() : 0.0;
-  if (flow) system_.hooks.push_back(std::move(flow));  // after the projection (DESIGN.md hook order)
+  if (flow) system_.hooks.push_back(std::move(flow));  // after the projection (docs/architecture.md "Step hooks": hook order)
   // What happens to a fluid particle that leaves the domain: the run stops (a numerical
   // failure, the default) or the particle is removed and counted (splashes).
   leave_domain_remove_ = root.table("checks").choice("leave_domain", "stop", {"stop", "remove"}) == "remove";

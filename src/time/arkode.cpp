@@ -25,7 +25,7 @@
 #include <sstream>
 
 #include "vesph/core/types.hpp"
-#include "vesph/time/integrator.hpp"
+#include "vesph/time/integrator_factory.hpp"
 
 namespace vesph {
 

@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "vesph/core/types.hpp"
-#include "vesph/time/integrator.hpp"
+#include "vesph/time/integrator_factory.hpp"
 
 namespace vesph {
 

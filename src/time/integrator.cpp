@@ -1,4 +1,5 @@
 #include "vesph/time/integrator.hpp"
+#include "vesph/time/integrator_factory.hpp"
 
 #include <algorithm>
 #include <cmath>

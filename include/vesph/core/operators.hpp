@@ -1,13 +1,14 @@
 #pragma once
 // Reference SPH operators of a per-particle scalar field, for tests and diagnostics (not for
-// the right-hand side: effects go through the pair driver, vesph/physics/pair_driver.hpp).
+// the right-hand side: effects go through the pair driver). They run on the neighbour loop of
+// vesph/core/pair_loop.hpp, as the pair driver does.
 //
 // Every function evaluates its operator at each moving particle i in [0, n_moving) from all
 // its neighbours j in a built NeighbourList (moving and fixed ones alike), with the same
 // pair selection as the pair driver: pairs with r >= kernel support or r == 0 are skipped.
 // f holds one value per particle and covers ALL particles (moving, then fixed).
 //
-// Conventions (as in vesph/physics/effect.hpp):
+// Conventions (as in vesph/core/pair_loop.hpp, Neighbour):
 //   r_ij = x_i - x_j           minimum image along periodic axes,  r = |r_ij|
 //   F_ij = (dW/dr)(r) / r      negative inside the support for all kernels of kernel.hpp
 //   grad_i W_ij = F_ij r_ij    the kernel gradient with respect to x_i

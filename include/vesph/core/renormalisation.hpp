@@ -1,7 +1,7 @@
 #pragma once
 // The kernel-gradient correction of Randles & Libersky (1996), shared by the renormalised
-// pressure gradient (src/physics/pressure_gradient.cpp) and the ISPH projection's gradient
-// rows (src/isph/projection.cpp):
+// pressure gradient (the pressure_gradient effect, form = "renormalised") and the ISPH
+// projection's gradient rows (src/isph/pressure_gradient_rows.cpp):
 //   M_i = -sum_j V_j F_ij r_ij r_ij^T      (the identity on a full support, to quadrature error)
 //   grad f_i = M_i^-1 sum_j V_j (f_j - f_i) F_ij r_ij   exact for linear f on any support.
 // Where M_i is near-singular (an isolated particle, a filament: smallest eigenvalue below 0.1)

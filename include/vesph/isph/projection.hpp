@@ -1,58 +1,18 @@
 #pragma once
 // Incompressible SPH: the projection of thesis §3.5 (Cummins & Rudman 1999) as a post-step
-// hook (DESIGN.md "ISPH"). The right-hand side of an ISPH scene has no pressure: the
-// integrator advances positions and velocities with the other forces (viscous, body, elastic)
-// over a step dt to the intermediate velocity v*. After the accepted step this hook
+// hook (docs/architecture.md "ISPH projection"; docs/theory.md §10). The right-hand side of an
+// ISPH scene has no pressure: the integrator advances positions and velocities with the other
+// forces (viscous, body, elastic) over a step dt to the intermediate velocity v*. After the
+// accepted step this hook
 //   1. flags the free surface at the accepted positions ([effects.free_surface], thesis §4.2);
 //   2. solves for the pressure: p = 0 on free-surface particles (Dirichlet), and on the other
 //      fluid particles the pressure Poisson equation of thesis §3.5,
-//          div(grad p / rho) = div(v*) / dt,
-//      with the divergence of the continuity equation (Fang eq. 26),
-//          div(v)_i = -(1/rho_i) sum_j m_j (v_i - v_j) . grad_i W_ij,
-//      and one of two Laplacians (solver.laplacian), both one kernel support wide:
-//        morris      thesis eq. (3.37) in the variable-density form of Cummins & Rudman (1999),
-//                        L p_i = sum_j k_ij (p_i - p_j),
-//                        k_ij = -8 rho_i m_j F_ij / (rho_i + rho_j)^2,  F_ij = (dW/dr)/r,
-//                    (L p ~ -lap p); it is exact for linear fields only where the kernel support
-//                    is full: a truncated support (the particle rows within a support of the
-//                    free surface) turns a linear pressure into a spurious source;
-//        consistent  (default) the same with the first-order error removed (Schwaiger 2008;
-//                    Fatehi & Manzari 2011):
-//                        L p_i = sum_j k_ij (p_i - p_j - r_ij . grad p_i),
-//                    grad p_i the renormalised gradient below: exact for linear fields on any
-//                    support, so a hydrostatic pressure is reproduced up to the free surface.
-//      The equation solved is L p_i = -rho_i div(v*)_i / dt. The projection is approximate
-//      (Cummins & Rudman): L is not the composition of the discrete divergence and gradient, so
-//      the divergence of the corrected velocity is reduced to the operators' truncation error,
-//      not to the solver tolerance. (The exact composition div_h G reaches two supports and
-//      annihilates pressure modes at the lattice scale: as the pressure equation it is
-//      near-singular, and its solutions grew without bound in the hydrostatic tank; it serves
-//      the divergence cleaning of step 4 instead; docs/theory.md.) Wall particles enter the
-//      source divergence with u_w + dt g: the wall pressure's hydrostatic part answers the body
-//      force's share of v*.n, which is not counted twice (a fluid at rest under gravity gets a
-//      zero source and exactly the hydrostatic pressure).
-//      The walls' pressure is extrapolated from the fluid as in WCSPH (Adami et al. 2012,
-//      eq. 27: p_w = sum_f p_f W_wf / sum_f W_wf + rho0 g . sum_f (r_w - r_f) W_wf / sum_f W_wf)
-//      and eliminated into the fluid rows: the discrete Neumann condition grad p . n = rho g . n;
-//      with solver.wall_condition = "no_penetration" (plain and predictor forms) instead
-//          p_w = sum_f c_wf p_f + rho0 sum_f c_wf min(delta_f, 0) (n_f . r_wf) / dt,
-//          delta_f = (u_f - u_w) . n_f + gap_f / dt,
-//      u the velocity the projection corrects (v* or v**, below), n_f = -sum_w V_w grad W_fw/|.|
-//      the unit normal away from the walls in f's support, gap_f = max(0, min_w n_f . r_fw - dx)
-//      how far f may still approach before it reaches the lattice's rest distance (dx/2 above
-//      the wall surface): the discrete form of grad p . n = rho (u - u_w) . n / dt, applied only
-//      where f would otherwise come closer than that within dt (the walls push, never pull);
-//      the normal flux into the walls then leaves the source divergence (it is these Neumann
-//      data, not a volume source). A fluid at rest under gravity gets u . n = dt g . n and the
-//      hydrostatic wall pressure as before.
-//      A prescribed inflow buffer (kind inflow) is such a wall (hydrostatic data: zero gradient
-//      without gravity); with solver.inlet_condition = "velocity" (plain and predictor
-//      forms) its particles take
-//          p_w = sum_f c_wf p_f + rho0 sum_f c_wf ((u_f - u_w) . e)(e . r_wf) / dt,
-//      e the flow direction: grad p . e = rho (u - u_w) . e / dt, push and pull, so that the
-//      correction brings the rows next to the buffer to its speed, plus the walls' hydrostatic
-//      term across the flow, rho0 (g - (g.e) e) . r_wf; the flux along e through the buffer then
-//      leaves the source divergence (docs/theory.md §10, the velocity inlet).
+//          L p_i = -rho_i div(v*)_i / dt,
+//      L the Laplacian of solver.laplacian (consistent or morris) and div the continuity
+//      divergence (the equations: src/isph/pressure_system.cpp), with the walls' pressure
+//      extrapolated from the fluid and eliminated into the fluid rows (solver.wall_condition,
+//      hydrostatic or no_penetration, and solver.inlet_condition for an inflow buffer: the
+//      Neumann data, src/isph/wall_conditions.cpp).
 //      Incremental form (Goda 1979; van Kan 1986), when the scene lists
 //      [effects.pressure_gradient]: the right-hand side then carries the last projection's
 //      pressure p^n through the step (best with form = "renormalised", the gradient below), so
@@ -82,34 +42,24 @@
 //      lattice's) over the time tau.
 //   3. corrects velocities and positions of all fluid particles,
 //          v_i = v*_i - dt (G p)_i,  x_i = x_i - dt^2/2 (G p)_i   (incremental: G (p^{n+1} - p^n)),
-//      with G (solver.gradient) the renormalised difference form (default; Randles & Libersky
-//      1996, exact for linear pressure fields, also at the free surface and the walls),
-//          (G p)_i = (1/rho_i) M_i^-1 sum_j V_j (p_j - p_i) grad_i W_ij,
-//          M_i = -sum_j V_j F_ij r_ij r_ij^T,  V_j = m_j/rho_j
-//      (M_i = I where it is near-singular: smallest eigenvalue below 0.1, an isolated particle),
-//      or thesis eq. (3.17) (difference, M = I) or (3.18) (symmetric, momentum-conserving).
+//      with G (solver.gradient) the renormalised difference form (default), thesis eq. (3.17)
+//      or (3.18) (src/isph/pressure_system.cpp).
 //      The position correction is the pressure acceleration's share of the step taken as
 //      constant over it: a second-order integrator moved the particles by dt (v^n + v*)/2, so
 //      the corrected positions are the thesis' x^{n+1} = x^n + dt (v^n + v^{n+1})/2.
-//   4. (solver.divergence_cleaning) the exact projection of the corrected velocities u onto
-//      the discretely divergence-free fields: with D the continuity divergence above, restricted
-//      to the unknowns and linear in the fluid velocities (walls keep theirs),
-//          u <- u - dt G_a phi,   V_i (D G_a phi)_i = V_i (D u)_i / dt,
-//          (G_a phi)_k = sum_j m_j (phi_k / rho_k^2 + phi_j / rho_j^2) grad_k W_kj,
-//      phi = 0 on free-surface and wall particles. G_a = -M^-1 D^T V (M = diag m, V = diag m/rho)
-//      is the adjoint of D, so V D G_a is symmetric negative semi-definite: the kinetic-energy
-//      orthogonal projection, which only removes energy. Its null space (checkerboards) does
-//      not move u; a relative diagonal shift of 1e-10 makes the matrix definite for UMFPACK/KLU.
-//      phi is a multiplier, not a pressure: the stored pressure stays that of step 2.
-//      Positions are corrected with the same -dt^2/2 G_a phi.
+//   4. (solver.divergence_cleaning) the exact projection of the corrected velocities onto the
+//      discretely divergence-free fields (src/isph/divergence_cleaning.cpp).
 // Without free-surface detection (closed or periodic domains) the pressure is fixed by
 // p = 0 at one fluid particle (the first), which makes the Neumann problem non-singular; the
 // mean of the right-hand side is removed first (solvability of the Neumann problem).
-// The matrix is assembled from the pairs inside the kernel support; when its pattern equals
-// the previous step's (no pair crossed the support, the free surface kept its particles), the
-// direct solvers keep their symbolic analysis.
+//
+// The modes are strategies chosen once, at construction and setup (src/isph/projection_parts.hpp):
+// the Laplacian and gradient forms, the carried pressure (none, increment, predictor), the wall
+// condition with the optional velocity inlet, and the cleaning as an optional stage. The
+// combinations that are not implemented are refused there with the reason.
 #include <chrono>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include "vesph/io/config.hpp"
@@ -118,20 +68,54 @@
 
 namespace vesph {
 
+namespace isph {
+// The strategies of the projection, chosen once (src/isph/projection_parts.hpp has the parts
+// that carry them out).
+// solver.laplacian: the operator of the pressure equation. exact is the divergence cleaning's
+// (src/isph/divergence_cleaning.cpp), not a choice of the scene.
+enum class LaplacianForm { consistent, morris, exact };
+// solver.gradient: the gradient G of the correction.
+enum class GradientForm { renormalised, difference, symmetric };
+// What the right-hand side carries from one projection to the next (step 2, the incremental
+// form): nothing (no [effects.pressure_gradient]: the plain form); the pressure, the
+// projection solving for its increment (solver.carried_pressure = "increment"); or the
+// pressure as the stages' predictor, the projection solving for the whole pressure
+// (carried_pressure = "predictor").
+enum class CarriedPressure { none, increment, predictor };
+// solver.wall_condition: the walls' Neumann data (src/isph/wall_conditions.cpp).
+enum class WallCondition { hydrostatic, no_penetration };
+// The velocity inlet (solver.inlet_condition = "velocity"): the prescribed inflow buffer's
+// direction e (a unit vector; the buffer's particles are those of kind inflow).
+template <int D>
+struct VelocityInlet {
+  Vec<D> direction;
+};
+
+struct PressureUnknowns;
+template <int D> struct GradientRows;
+template <int D> class WallConditions;
+template <int D> class PressureSystem;
+template <int D> class DivergenceCleaning;
+struct AssembledMatrix;
+}  // namespace isph
+
 template <int D>
 class Projection final : public StepHook<D> {
  public:
-  explicit Projection(ConfigTable& solver_table);
+  // solver_table: [solver] of an ISPH scene. inflow_direction: the prescribed inflow buffer's
+  // flow direction e (a unit vector), where the scene has one (the velocity inlet's data).
+  Projection(ConfigTable& solver_table, std::optional<Vec<D>> inflow_direction);
+  ~Projection() override;
 
   std::string_view name() const override { return "isph_projection"; }
   void setup(Setup<D>& s) override;
   bool changesState() const override { return true; }
-  void start(SphSystem<D>& system, double t, double* y) override;
-  void apply(SphSystem<D>& system, double t, double dt, double* y) override;
+  void start(SphSystem<D>& sys, double t, double* y) override;
+  void apply(SphSystem<D>& sys, double t, double dt, double* y) override;
   // The incremental form keeps the last pressure per particle: it follows the particles when
   // an inflow or outflow changes the set (a released particle starts from its buffer
   // particle's pressure).
-  void resized(SphSystem<D>& system, const ParticleRemap& remap) override {
+  void resized(SphSystem<D>& sys, const ParticleRemap& remap) override {
     if (previous_pressure_.size() == remap.old_size) remap.apply(previous_pressure_, 1, Field::Range::all);
   }
   // Checkpoints keep the pressure field (the incremental form's p^n, the iterative solvers'
@@ -149,96 +133,58 @@ class Projection final : public StepHook<D> {
   double divergenceAfter() const { return last_.divergence_after; }
   // With divergence cleaning: after the pressure projection, before the cleaning.
   double divergenceProjected() const { return last_.divergence_projected; }
-  const SolveReport& lastCleaning() const { return last_.cleaning; }
+  const SolveReport& lastCleaning() const;
   const SolveReport& lastSolve() const { return last_.solve; }
-  std::size_t unknowns() const { return n_unknowns_; }
+  std::size_t unknowns() const;
 
  private:
   struct LastProjection {
-    SolveReport solve, cleaning;
+    SolveReport solve;
     double assembly_seconds = 0, solve_seconds = 0, divergence_before = 0, divergence_after = 0;
     double divergence_projected = 0, cleaning_seconds = 0;
   };
+  // The free-surface detection the projection runs at the accepted positions (step 1): the
+  // scene's [effects.free_surface], bound at setup, and its flag field.
+  struct FreeSurfaceDetection {
+    Effect<D>* effect = nullptr;
+    const Field* flag = nullptr;
+  };
   void flagFreeSurface(SphSystem<D>& sys, double t);
   void numberUnknowns(const SphSystem<D>& sys);
-  // inlet_data (wallExtrapolation, wallsAndSource, divergence): the inflow buffer as a velocity
-  // inlet (solver.inlet_condition = "velocity") in this solve.
-  void wallExtrapolation(const SphSystem<D>& sys, double dt, bool inlet_data);
-  void wallNormals(SphSystem<D>& sys);
-  void wallsAndSource(SphSystem<D>& sys, double dt, bool whole_pressure, bool inlet_data);
-  // One assembled matrix with the record of its sparsity pattern (the direct solvers keep their
-  // symbolic analysis while it holds): the pressure equation's, and the cleaning's.
-  struct Assembled {
-    SparseRowMatrix matrix;
-    std::vector<int> outer, inner;  // the pattern of the previous assembly
-    std::size_t pattern_builds = 0;
-    bool pattern_changed = true;
-  };
-  enum class Gradient { renormalised, difference, symmetric };
-  enum class Laplacian { consistent, morris, exact };
-  void gradientRows(SphSystem<D>& sys, Gradient form, bool walls_enter);
-  void assemble(SphSystem<D>& sys, double dt, Laplacian op, bool incremental, Assembled& out);
-  Laplacian operator_() const { return consistent_ ? Laplacian::consistent : Laplacian::morris; }
-  void clean(SphSystem<D>& sys, double t, double dt, double* y);
-  double divergence(SphSystem<D>& sys, const Vec<D>& wall_shift, bool tangential_walls = false,
-                    bool inlet_data = false);
-  void correct(SphSystem<D>& sys, double dt, double* y, bool cleaning);
+  // Solves the pressure equation over dt for the velocity in P.velocity (start and apply).
+  SolveReport solvePressure(SphSystem<D>& sys, double dt, const double* carried);
+  void predictorStep(SphSystem<D>& sys, double dt);
+  void relaxDensity(SphSystem<D>& sys, double dt);
   void correctPositions(SphSystem<D>& sys, double dt, double* y);
   void storePressure(const SphSystem<D>& sys);
 
+  // Configuration: the strategies, read from [solver] at construction; the carried pressure
+  // is completed at setup (none without [effects.pressure_gradient]).
   LinearSolverOptions options_;
-  Gradient gradient_ = Gradient::renormalised;
-  bool consistent_ = true, incremental_ = false, cleaning_ = false;
-  // solver.wall_condition = "no_penetration": the walls' Neumann data carry the fluid's normal
-  // velocity (header, step 2) instead of the hydrostatic balance alone; solver.carried_pressure
-  // = "predictor": the whole pressure solved every step (header, incremental form).
-  bool no_penetration_ = false, predictor_ = false;
-  // solver.inlet_condition = "velocity": the inflow buffer's pressure carries the Neumann data
-  // of its velocity (inflow_direction_ = e, the flow direction, taken from the inflow hook at
-  // the first step's solve).
-  bool velocity_inlet_ = false;
-  Vec<D> inflow_direction_ = Vec<D>::Zero();
-  std::vector<Vec<D>> wall_normal_;     // per moving particle: unit normal away from the walls (0: none near)
-  std::vector<double> wall_gap_;        // per moving particle: the approach left before the rest distance, m
-  LinearSolverOptions cleaning_options_;
-  std::unique_ptr<LinearSolver> cleaning_solver_;
-  std::vector<double> multiplier_;
-  Eigen::VectorXd cleaning_solution_;
-  std::uint64_t cleaning_iterations_total_ = 0;
-  int cleaning_iterations_max_ = 0;
-  double cleaning_residual_max_ = 0, cleaning_seconds_ = 0;
-  std::vector<double> previous_pressure_;
-  std::unique_ptr<LinearSolver> solver_;
-  Effect<D>* free_surface_effect_ = nullptr;
-  const Field* surface_flag_ = nullptr;
-  Field* pressure_ = nullptr;
-  Vec<D> g_ = Vec<D>::Zero();
-  double rho0_ = 1;
+  isph::GradientForm gradient_ = isph::GradientForm::renormalised;
+  isph::LaplacianForm laplacian_ = isph::LaplacianForm::consistent;
+  isph::CarriedPressure carried_ = isph::CarriedPressure::increment;
+  isph::WallCondition wall_condition_ = isph::WallCondition::hydrostatic;
+  std::optional<isph::VelocityInlet<D>> velocity_inlet_;
+  LinearSolverOptions cleaning_options_;  // solver.cleaning_solver, with divergence_cleaning
   // solver.density_relaxation_time (tau, s; 0: off) and the lattice's number density, 1/m^D,
   // against which the free-surface effect's number density at the step's positions is compared.
   double density_relaxation_time_ = 0, lattice_number_density_ = 1;
-  bool pinned_ = false, has_free_surface_ = false;
 
-  // Unknowns: the fluid particles off the free surface (unknown_of_[i] = row or -1).
-  std::vector<int> unknown_of_, particle_of_;
-  std::size_t n_unknowns_ = 0;
-  // Wall extrapolation weights c_wf = W_wf / sum W, by neighbour-list entry of the wall
-  // particle's moving candidates, and its constant part b_w (hydrostatic), by fixed index.
-  std::vector<double> wall_weight_, wall_offset_;
-  // The pressure acceleration G p of each moving particle k as a linear combination of the
-  // pressures of k and its candidates: entries [start[k] + k, start[k+1] + k + 1) of the
-  // neighbour-list layout, the first for k itself (coefficient 0 beyond the support).
-  std::vector<Index> g_index_;
-  std::vector<Vec<D>> g_coef_;
-  // The system, row by row (per thread while assembling), and pattern bookkeeping.
-  struct RowBuffer {
-    std::vector<int> slot;       // column -> position in cols (or -1)
-    std::vector<int> cols, lengths;
-    std::vector<double> vals;
-  };
-  std::vector<RowBuffer> rows_;
-  Assembled pressure_system_, cleaning_system_;
-  Eigen::VectorXd rhs_, solution_;
+  // Set up.
+  FreeSurfaceDetection free_surface_;
+  Field* pressure_ = nullptr;
+  std::unique_ptr<LinearSolver> solver_;
+  std::unique_ptr<isph::PressureUnknowns> unknowns_;
+  std::unique_ptr<isph::GradientRows<D>> gradient_rows_;
+  std::unique_ptr<isph::WallConditions<D>> walls_;
+  std::unique_ptr<isph::PressureSystem<D>> system_;
+  std::unique_ptr<isph::AssembledMatrix> pressure_matrix_;
+  std::unique_ptr<isph::DivergenceCleaning<D>> cleaning_;  // null: no cleaning stage
+
+  // Per step.
+  Eigen::VectorXd solution_;
+  std::vector<double> previous_pressure_;
   std::vector<double> divergence_;  // per moving particle: div v*
   std::vector<double> correction_;  // per moving particle: the velocity correction / dt
 
@@ -250,6 +196,6 @@ class Projection final : public StepHook<D> {
 };
 
 template <int D>
-std::unique_ptr<StepHook<D>> makeProjection(ConfigTable& solver_table);
+std::unique_ptr<StepHook<D>> makeProjection(ConfigTable& solver_table, std::optional<Vec<D>> inflow_direction);
 
 }  // namespace vesph

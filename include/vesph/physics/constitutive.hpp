@@ -1,7 +1,7 @@
 #pragma once
 // Constitutive models (seed thesis §2.3; Fang et al. 2006 §2; Xu et al. 2013).
 //
-// A model is a pure rate function (DESIGN.md "Style"): given the velocity gradient
+// A model is a pure rate function (docs/architecture.md "Effects"): given the velocity gradient
 // kappa (kappa_ab = dv_a/dx_b, Fang eq. 23) and its own elastic stress S, it returns dS/dt.
 // No time step, no half steps: the integrator owns time. ConstitutiveEffect<D, Model> turns a
 // model into an effect: it registers the elastic stress as an evolving field of the ODE state
@@ -27,7 +27,6 @@
 #include <sstream>
 #include <string>
 
-#include "vesph/io/config.hpp"
 #include "vesph/physics/effect.hpp"
 
 namespace vesph {

@@ -1,9 +1,10 @@
 #pragma once
-// The effect interface (DESIGN.md "Effects"): one physics effect per file, composed by the
+// The effect interface (docs/architecture.md "Effects"): one physics effect per file, composed by the
 // scene. An effect declares the fields it needs at setup and adds its contribution to the
 // time derivatives. It never loops over neighbours itself: the pair driver
-// (vesph/physics/pair_driver.hpp) owns the neighbour loop and the threading, and hands each
-// pair effect the neighbours of one particle with the kernel already evaluated.
+// (vesph/physics/pair_driver.hpp) runs the neighbour loop (vesph/core/pair_loop.hpp, with the
+// threading and Neighbour, the pair geometry) and hands each pair effect the neighbours of one
+// particle with the kernel already evaluated.
 //
 // The right-hand side runs in phases; a phase with no effect in it costs nothing:
 //   state      per particle: fields that follow from the state (pressure from density)
@@ -22,24 +23,12 @@
 
 #include "vesph/core/kernel.hpp"
 #include "vesph/core/neighbours.hpp"
+#include "vesph/core/pair_loop.hpp"
 #include "vesph/core/particles.hpp"
 
 namespace vesph {
 
 enum class Phase { state, gradients, rates, forces, external };
-
-// One neighbour j of particle i, with the pair geometry evaluated once per pass:
-// rij = xi - xj (minimum image), r = |rij|, W = W(r,h), F = (dW/dr)/r, so that the kernel
-// gradient with respect to xi is grad_i W_ij = F * rij. W is evaluated only in passes where
-// some effect asks for it (Effect::needsKernelValue); otherwise it is left unset.
-template <int D>
-struct Neighbour {
-  Vec<D> rij;
-  double r;
-  double W;
-  double F;
-  Index j;
-};
 
 // Everything an effect may read or write during one right-hand-side evaluation.
 // Derivative arrays cover the moving particles only (the ODE state).
@@ -111,9 +100,10 @@ struct Setup {
   std::vector<Field*>* evolving = nullptr;          // the system's evolving fields
   const std::vector<Effect<D>*>* effects = nullptr;  // every effect of the scene
 
-  // The scene's effect of that name, or nullptr (for prerequisites between effects).
-  const Effect<D>* find(std::string_view name) const {
-    for (const Effect<D>* e : *effects)
+  // The scene's effect of that name, or nullptr (for prerequisites between effects, and for
+  // a step hook that runs an effect itself: the ISPH projection's free-surface detection).
+  Effect<D>* find(std::string_view name) const {
+    for (Effect<D>* e : *effects)
       if (e->name() == name) return e;
     return nullptr;
   }

@@ -1,5 +1,6 @@
 #pragma once
-// The integrator interface (DESIGN.md "Integrators"). An integrator advances the ODE state
+// The integrator interface (docs/architecture.md "Integrators"); building one from the scene
+// is vesph/time/integrator_factory.hpp. An integrator advances the ODE state
 // y' = f(t, y) of an OdeSystem; it owns time, the system owns physics. All integrators
 // respect the same explicit stability limits (stableStep) and call the system's afterStep
 // after every accepted step (post-step hooks, diagnostics, failure checks).
@@ -8,8 +9,6 @@
 #include <memory>
 #include <string>
 #include <vector>
-
-#include "vesph/io/config.hpp"
 
 namespace vesph {
 
@@ -121,17 +120,6 @@ class Integrator {
   virtual std::vector<double> carried() const { return {}; }
   virtual void restoreCarried(const std::vector<double>& values) {}
 };
-
-struct IntegratorEntry {
-  std::string name;
-  std::string summary;
-  std::unique_ptr<Integrator> (*make)(ConfigTable& cfg, const StepControl& control, const ReferenceScales& scales);
-};
-const std::vector<IntegratorEntry>& integratorRegistry();
-
-// Reads [integrator] (type and the step-control keys) and builds the integrator. default_cfl:
-// the CFL coefficient when the scene gives none (WCSPH 0.125; ISPH 0.175, thesis §3.5).
-std::unique_ptr<Integrator> makeIntegrator(ConfigTable& cfg, const ReferenceScales& scales, double default_cfl = 0.125);
 
 // The explicit Butcher tables of SUNDIALS 6.4.1 (integrator.table), by name without the
 // ARKODE_ prefix, with their order q and embedding order p (0: no embedding).

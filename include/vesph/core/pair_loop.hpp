@@ -1,0 +1,210 @@
+#pragma once
+// The one neighbour loop of vesph (docs/architecture.md "Neighbour loop"): nothing else
+// iterates a NeighbourList. For each particle it gathers the neighbours inside the kernel
+// support into a per-thread scratch batch, evaluating the pair geometry and the kernel once,
+// and hands the batch to a callback. OpenMP parallelises over particles; a callback writes
+// only to its own particle i, so there are no races and no atomics. Users: the pair driver
+// (which runs the effects' pair passes), the ISPH projection (src/isph) and the reference
+// operators (core/operators.hpp). Nothing in core/ depends on the physics layer.
+//
+// Loops that keep per-candidate values in the neighbour list's own layout (the ISPH matrix
+// assembly stores gradient coefficients and wall weights by list entry) visit the candidates
+// of one particle through CandidatePairs instead of a gathered batch.
+#include <omp.h>
+
+#include <cmath>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "vesph/core/domain.hpp"
+#include "vesph/core/kernel.hpp"
+#include "vesph/core/neighbours.hpp"
+#include "vesph/core/particles.hpp"
+
+namespace vesph {
+
+// One neighbour j of particle i, with the pair geometry evaluated once per pass:
+// rij = xi - xj (minimum image), r = |rij|, W = W(r,h), F = (dW/dr)/r, so that the kernel
+// gradient with respect to xi is grad_i W_ij = F * rij. W is evaluated only in passes that
+// ask for it (with_w); otherwise it is left unset.
+template <int D>
+struct Neighbour {
+  Vec<D> rij;
+  double r;
+  double W;
+  double F;
+  Index j;
+};
+
+template <int D>
+class PairLoop {
+ public:
+  // Sizes the per-thread scratch for the current list (allocation happens here, never in
+  // a loop).
+  void prepare(const NeighbourList<D>& list) {
+    const std::size_t threads = static_cast<std::size_t>(omp_get_max_threads());
+    if (scratch_.size() < threads) scratch_.resize(threads);
+    for (auto& s : scratch_)
+      if (s.size() < list.maxCount()) s.resize(list.maxCount() + 16);
+  }
+
+  // fn(i, moving neighbours, fixed neighbours) for every moving particle i, in parallel. W is
+  // evaluated only with with_w. Returns the pairs handed out.
+  template <class Fn>
+  std::uint64_t forEachMoving(const ParticleSet<D>& p, const Kernel& kernel, const Domain<D>& domain,
+                              const NeighbourList<D>& list, bool with_w, Fn&& fn) {
+    prepare(list);
+    return with_w ? forEachMovingWhere<true>(p, kernel, domain, list, fn)
+                  : forEachMovingWhere<false>(p, kernel, domain, list, fn);
+  }
+
+  // As forEachMoving, for the moving particles i with wanted(i) only. The scratch must be
+  // prepared for this list (prepare, or forEachMoving on it).
+  template <bool WithW, class Fn, class Pred = bool (*)(Index)>
+  std::uint64_t forEachMovingWhere(const ParticleSet<D>& p, const Kernel& kernel, const Domain<D>& domain,
+                                   const NeighbourList<D>& list, Fn&& fn, Pred&& wanted = everyParticle) {
+    const std::size_t n = p.n_moving;
+    std::uint64_t pairs = 0;
+    kernel.visit([&](auto shape) {
+#pragma omp parallel reduction(+ : pairs) if (n >= kParallelMinimum)
+      {
+        Neighbour<D>* buf = scratch_[static_cast<std::size_t>(omp_get_thread_num())].data();
+#pragma omp for schedule(static)
+        for (std::size_t i = 0; i < n; ++i) {
+          if (!wanted(static_cast<Index>(i))) continue;
+          const std::size_t nm = gather<WithW>(shape, p, kernel, domain, list, i, list.start[i], list.split[i], buf);
+          const std::size_t nf = gather<WithW>(shape, p, kernel, domain, list, i, list.split[i], list.start[i + 1], buf + nm);
+          pairs += nm + nf;
+          fn(static_cast<Index>(i), std::span<const Neighbour<D>>(buf, nm), std::span<const Neighbour<D>>(buf + nm, nf));
+        }
+      }
+    });
+    return pairs;
+  }
+
+  // A pass over the fixed particles, each with its moving neighbours (W evaluated):
+  // fn(i, span<const Neighbour<D>>) for i in [n_moving, N). The scratch must be prepared.
+  template <class Fn>
+  void forEachFixed(const ParticleSet<D>& p, const Kernel& kernel, const Domain<D>& domain,
+                    const NeighbourList<D>& list, Fn&& fn) {
+    const std::size_t n0 = p.n_moving, N = p.size();
+    kernel.visit([&](auto shape) {
+#pragma omp parallel if (N - n0 >= kParallelMinimum)
+      {
+        Neighbour<D>* buf = scratch_[static_cast<std::size_t>(omp_get_thread_num())].data();
+#pragma omp for schedule(static)
+        for (std::size_t i = n0; i < N; ++i) {
+          const std::size_t nm = gather<true>(shape, p, kernel, domain, list, i, list.start[i], list.split[i], buf);
+          fn(static_cast<Index>(i), std::span<const Neighbour<D>>(buf, nm));
+        }
+      }
+    });
+  }
+
+ private:
+  static constexpr bool everyParticle(Index) { return true; }
+
+  template <bool WithW, class Shape>
+  static std::size_t gather(Shape, const ParticleSet<D>& p, const Kernel& kernel, const Domain<D>& domain,
+                            const NeighbourList<D>& list, std::size_t i, std::size_t k0, std::size_t k1,
+                            Neighbour<D>* out) {
+    // Everything the loop reads is copied into locals first: the compiler cannot otherwise
+    // prove that the stores into `out` leave them unchanged, and reloads them every pair.
+    const double* __restrict x = p.position.data();
+    const Index* __restrict nbr = list.nbr.data();
+    const double inv_h = 1.0 / kernel.h;
+    const double cut2 = kernel.supportRadius() * kernel.supportRadius();
+    // F = (dW/dr)/r = (sigma/h^(D+1)) f'(q)/(q h)
+    const double ws = kernel.w_scale, fs = kernel.dw_scale * inv_h;
+    double period[D], half[D], xi[D];
+    for (int a = 0; a < D; ++a) {
+      period[a] = domain.periodic[a] ? domain.length(a) : 0.0;
+      half[a] = domain.periodic[a] ? 0.5 * period[a] : 1e300;
+      xi[a] = x[D * i + a];
+    }
+    std::size_t c = 0;
+    for (std::size_t k = k0; k < k1; ++k) {
+      const Index j = nbr[k];
+      double d[D], r2 = 0;
+      for (int a = 0; a < D; ++a) {
+        double da = xi[a] - x[D * j + a];
+        da = da > half[a] ? da - period[a] : (da < -half[a] ? da + period[a] : da);
+        d[a] = da;
+        r2 += da * da;
+      }
+      if (r2 >= cut2 || r2 == 0.0) continue;
+      const double r = std::sqrt(r2), q = r * inv_h;
+      Neighbour<D>& nb = out[c++];
+      for (int a = 0; a < D; ++a) nb.rij[a] = d[a];
+      nb.r = r;
+      if constexpr (WithW) nb.W = ws * Shape::f(q);
+      nb.F = fs * Shape::df_over_q(q);
+      nb.j = j;
+    }
+    return c;
+  }
+
+  std::vector<std::vector<Neighbour<D>>> scratch_;
+};
+
+// The candidates of one particle in the neighbour list's own layout (entries k of
+// [list.start[i], list.start[i+1]), candidates out to the support plus the skin), for loops
+// that store a value per list entry and read the lists of a particle's neighbours too (the
+// ISPH pressure matrix). The pair selection is the gathered loop's: r < support, r > 0.
+//   CandidatePairs<D> pairs(particles, kernel, domain);
+//   kernel.visit([&](auto shape) { ... pairs.visit(shape, i, k0, k1, inside, outside) ... });
+// inside(k, j, rij, W, F) for a candidate inside the support, outside(k) otherwise.
+template <int D>
+class CandidatePairs {
+ public:
+  CandidatePairs(const ParticleSet<D>& p, const Kernel& kernel, const Domain<D>& domain, const NeighbourList<D>& list)
+      : x_(p.position.data()),
+        nbr_(list.nbr.data()),
+        domain_(&domain),
+        cut2_(kernel.supportRadius() * kernel.supportRadius()),
+        inv_h_(1.0 / kernel.h),
+        w_scale_(kernel.w_scale),
+        f_scale_(kernel.dw_scale / kernel.h) {}  // = the gathered loop's scale up to one rounding
+
+  // The geometry of the pair (i, j); false outside the support (rij, W, F then unset).
+  template <class Shape>
+  bool operator()(Shape, std::size_t i, std::size_t j, Vec<D>& rij, double& W, double& F) const {
+    double r2 = 0;
+    for (int a = 0; a < D; ++a) {
+      rij[a] = domain_->image(a, x_[D * i + a] - x_[D * j + a]);
+      r2 += rij[a] * rij[a];
+    }
+    if (r2 >= cut2_ || r2 == 0.0) return false;
+    const double q = std::sqrt(r2) * inv_h_;
+    W = w_scale_ * Shape::f(q);
+    F = f_scale_ * Shape::df_over_q(q);
+    return true;
+  }
+
+  // Entries [k0, k1) of particle i in list order.
+  template <class Shape, class Inside, class Outside>
+  void visit(Shape shape, std::size_t i, std::size_t k0, std::size_t k1, Inside&& inside, Outside&& outside) const {
+    Vec<D> rij;
+    double W, F;
+    for (std::size_t k = k0; k < k1; ++k) {
+      const std::size_t j = nbr_[k];
+      if ((*this)(shape, i, j, rij, W, F))
+        inside(k, j, rij, W, F);
+      else
+        outside(k);
+    }
+  }
+  template <class Shape, class Inside>
+  void visit(Shape shape, std::size_t i, std::size_t k0, std::size_t k1, Inside&& inside) const {
+    visit(shape, i, k0, k1, inside, [](std::size_t) {});
+  }
+
+ private:
+  const double* x_;
+  const Index* nbr_;
+  const Domain<D>* domain_;
+  double cut2_, inv_h_, w_scale_, f_scale_;
+};
+
+}  // namespace vesph

@@ -1,0 +1,24 @@
+#pragma once
+// The integrators by name, built from the scene's [integrator] table (the config-reading side
+// of vesph/time/integrator.hpp, which itself knows nothing of the configuration).
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "vesph/io/config.hpp"
+#include "vesph/time/integrator.hpp"
+
+namespace vesph {
+
+struct IntegratorEntry {
+  std::string name;
+  std::string summary;
+  std::unique_ptr<Integrator> (*make)(ConfigTable& cfg, const StepControl& control, const ReferenceScales& scales);
+};
+const std::vector<IntegratorEntry>& integratorRegistry();
+
+// Reads [integrator] (type and the step-control keys) and builds the integrator. default_cfl:
+// the CFL coefficient when the scene gives none (WCSPH 0.125; ISPH 0.175, thesis §3.5).
+std::unique_ptr<Integrator> makeIntegrator(ConfigTable& cfg, const ReferenceScales& scales, double default_cfl = 0.125);
+
+}  // namespace vesph

@@ -1,0 +1,392 @@
+// The pressure equation of the ISPH projection (docs/theory.md §10; docs/architecture.md
+// "ISPH projection"): the unknowns, the continuity divergence, the gradient rows and the
+// assembly.
+//
+// The pressure Poisson equation of thesis §3.5,
+//     div(grad p / rho) = div(v*) / dt,
+// with the divergence of the continuity equation (Fang eq. 26),
+//     div(v)_i = -(1/rho_i) sum_j m_j (v_i - v_j) . grad_i W_ij,
+// and one of two Laplacians (solver.laplacian), both one kernel support wide:
+//   morris      thesis eq. (3.37) in the variable-density form of Cummins & Rudman (1999),
+//                   L p_i = sum_j k_ij (p_i - p_j),
+//                   k_ij = -8 rho_i m_j F_ij / (rho_i + rho_j)^2,  F_ij = (dW/dr)/r,
+//               (L p ~ -lap p); it is exact for linear fields only where the kernel support
+//               is full: a truncated support (the particle rows within a support of the
+//               free surface) turns a linear pressure into a spurious source;
+//   consistent  (default) the same with the first-order error removed (Schwaiger 2008;
+//               Fatehi & Manzari 2011):
+//                   L p_i = sum_j k_ij (p_i - p_j - r_ij . grad p_i),
+//               grad p_i the renormalised gradient below: exact for linear fields on any
+//               support, so a hydrostatic pressure is reproduced up to the free surface.
+// The equation solved is L p_i = -rho_i div(v*)_i / dt. The projection is approximate
+// (Cummins & Rudman): L is not the composition of the discrete divergence and gradient, so
+// the divergence of the corrected velocity is reduced to the operators' truncation error,
+// not to the solver tolerance. (The exact composition div_h G reaches two supports and
+// annihilates pressure modes at the lattice scale: as the pressure equation it is
+// near-singular, and its solutions grew without bound in the hydrostatic tank; it serves
+// the divergence cleaning instead, src/isph/divergence_cleaning.cpp; docs/theory.md.)
+// The walls' pressures are eliminated into the fluid rows (src/isph/wall_conditions.cpp).
+//
+// The gradient G of the correction (solver.gradient) is the renormalised difference form
+// (default; Randles & Libersky 1996, exact for linear pressure fields, also at the free
+// surface and the walls),
+//     (G p)_i = (1/rho_i) M_i^-1 sum_j V_j (p_j - p_i) grad_i W_ij,
+//     M_i = -sum_j V_j F_ij r_ij r_ij^T,  V_j = m_j/rho_j
+// (M_i = I where it is near-singular: smallest eigenvalue below 0.1, an isolated particle),
+// or thesis eq. (3.17) (difference, M = I) or (3.18) (symmetric, momentum-conserving).
+//
+// The matrix is assembled from the pairs inside the kernel support; when its pattern equals
+// the previous step's (no pair crossed the support, the free surface kept its particles), the
+// direct solvers keep their symbolic analysis.
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "projection_parts.hpp"
+#include "vesph/core/pair_loop.hpp"
+#include "vesph/core/renormalisation.hpp"
+
+namespace vesph::isph {
+namespace {
+// Relative diagonal shift of the exact projection's matrix (assemble()).
+constexpr double kExactShift = 1e-10;
+}  // namespace
+
+void PressureUnknowns::number(std::size_t n, const double* surface_flag) {
+  unknown_of.assign(n, -1);
+  particle_of.clear();
+  std::size_t surface = 0;
+  for (std::size_t i = 0; i < n; ++i)
+    if (surface_flag && surface_flag[i] > 0.5) ++surface;
+  // No Dirichlet particle at all: the pure Neumann problem fixes p only up to a constant;
+  // p = 0 at the first fluid particle fixes it.
+  pinned = surface == 0;
+  for (std::size_t i = pinned ? 1 : 0; i < n; ++i) {
+    if (surface_flag && surface_flag[i] > 0.5) continue;
+    unknown_of[i] = static_cast<int>(particle_of.size());
+    particle_of.push_back(static_cast<int>(i));
+  }
+  count = particle_of.size();
+}
+
+double PressureUnknowns::rms(const std::vector<double>& per_particle) const {
+  double sum2 = 0;
+  for (std::size_t r = 0; r < count; ++r) {
+    const double d = per_particle[static_cast<std::size_t>(particle_of[r])];
+    sum2 += d * d;
+  }
+  return count ? std::sqrt(sum2 / static_cast<double>(count)) : 0.0;
+}
+
+template <int D>
+void continuityDivergence(SphSystem<D>& sys, const WallFlux<D>& walls, std::vector<double>& out) {
+  const ParticleSet<D>& P = sys.particles;
+  const std::size_t n = P.n_moving;
+  out.resize(n);
+  const double* v = P.velocity.data();
+  const double* m = P.mass.data();
+  const double* rho = P.density.data();
+  const Vec<D> wall_shift = walls.shift;
+  sys.driver.forEachMoving(P, sys.kernel, sys.domain, sys.neighbours, false,
+                           [&](Index i, std::span<const Neighbour<D>> moving, std::span<const Neighbour<D>> fixed) {
+                             double acc = 0;
+                             for (const Neighbour<D>& nb : moving) {
+                               double d = 0;
+                               for (int a = 0; a < D; ++a) d += (v[D * i + a] - v[D * nb.j + a]) * nb.rij[a];
+                               acc += m[nb.j] * d * nb.F;
+                             }
+                             for (const Neighbour<D>& nb : fixed) {
+                               Vec<D> u;
+                               for (int a = 0; a < D; ++a) u[a] = v[D * i + a] - v[D * nb.j + a] - wall_shift[a];
+                               // no_penetration: the normal flux into the wall is the walls'
+                               // Neumann data (wall_conditions.cpp), not a source
+                               if (walls.normal_flux_removed) {
+                                 const Vec<D>& normal = (*walls.normal_flux_removed)[i];
+                                 u -= u.dot(normal) * normal;
+                               }
+                               // the velocity inlet: the flux along the flow through the buffer
+                               // is the buffer's Neumann data (wall_conditions.cpp)
+                               if (walls.inlet && P.kind[nb.j] == static_cast<std::uint8_t>(ParticleKind::inflow)) {
+                                 const Vec<D>& e = walls.inlet->direction;
+                                 u -= u.dot(e) * e;
+                               }
+                               acc += m[nb.j] * u.dot(nb.rij) * nb.F;
+                             }
+                             out[i] = -acc / rho[i];
+                           });
+}
+
+template <int D>
+void GradientRows<D>::build(SphSystem<D>& sys, GradientForm form, WallPressures walls) {
+  const ParticleSet<D>& P = sys.particles;
+  const NeighbourList<D>& list = sys.neighbours;
+  const std::size_t n = P.n_moving;
+  const std::size_t entries = list.start[n] + n;
+  index.resize(entries);
+  coef.resize(entries);
+  const CandidatePairs<D> pairs(P, sys.kernel, sys.domain, list);
+  const double* m = P.mass.data();
+  const double* rho = P.density.data();
+  const bool walls_enter = walls == WallPressures::enter;
+  using Mat = Eigen::Matrix<double, D, D>;
+  sys.kernel.visit([&](auto shape) {
+#pragma omp parallel for schedule(static) if (n >= kParallelMinimum)
+    for (std::size_t k = 0; k < n; ++k) {
+      const std::size_t e0 = list.start[k] + k;
+      // Renormalisation M_k = -sum_j V_j F r r^T (identity for the plain forms).
+      Mat Minv = Mat::Identity();
+      if (form == GradientForm::renormalised) {
+        Mat M = Mat::Zero();
+        pairs.visit(shape, k, list.start[k], list.start[k + 1],
+                    [&](std::size_t, std::size_t j, const Vec<D>& rkj, double, double F) {
+                      M -= (m[j] / rho[j] * F) * rkj * rkj.transpose();
+                    });
+        Minv = renormalisationInverse<D>(M);
+      }
+      Vec<D> self = Vec<D>::Zero();
+      const double rhok = rho[k];
+      // entry e of k's row for the list entry c: e0 + 1 + (c - start[k])
+      const std::size_t shift = e0 + 1 - list.start[k];
+      pairs.visit(
+          shape, k, list.start[k], list.start[k + 1],
+          [&](std::size_t c, std::size_t j, const Vec<D>& rkj, double, double F) {
+            const std::size_t e = c + shift;
+            index[e] = static_cast<Index>(j);
+            if (form == GradientForm::symmetric) {  // thesis eq. (3.18)
+              coef[e] = walls_enter || j < n ? Vec<D>((m[j] / (rho[j] * rho[j]) * F) * rkj) : Vec<D>::Zero();
+              self += (m[j] / (rhok * rhok) * F) * rkj;
+            } else {  // thesis eq. (3.17), renormalised or not
+              coef[e] = (m[j] / rho[j] * F / rhok) * (Minv * rkj);
+              self -= coef[e];
+            }
+          },
+          [&](std::size_t c) {
+            const std::size_t e = c + shift;
+            index[e] = static_cast<Index>(list.nbr[c]);
+            coef[e].setZero();
+          });
+      index[e0] = static_cast<Index>(k);
+      coef[e0] = self;
+    }
+  });
+}
+
+template <int D>
+void PressureSystem<D>::assemble(SphSystem<D>& sys, double dt, LaplacianForm form, const PressureUnknowns& unknowns,
+                                 const GradientRows<D>& gradient, const WallConditions<D>& walls,
+                                 const std::vector<double>& divergence, const double* carried, AssembledMatrix& out) {
+  const ParticleSet<D>& P = sys.particles;
+  const NeighbourList<D>& list = sys.neighbours;
+  const std::size_t n = P.n_moving, rows = unknowns.count;
+  rhs_.resize(static_cast<Eigen::Index>(rows));
+  const int threads = rows >= kParallelMinimum ? omp_get_max_threads() : 1;
+  if (rows_.size() < static_cast<std::size_t>(threads)) rows_.resize(static_cast<std::size_t>(threads));
+  const CandidatePairs<D> pairs(P, sys.kernel, sys.domain, list);
+  const double* m = P.mass.data();
+  const double* rho = P.density.data();
+  const double inv_dt = 1.0 / dt;
+  const bool consistent = form == LaplacianForm::consistent;
+  const bool exact = form == LaplacianForm::exact;
+  const std::vector<int>& unknown_of = unknowns.unknown_of;
+  const std::vector<int>& particle_of = unknowns.particle_of;
+  const std::vector<Index>& g_index = gradient.index;
+  const std::vector<Vec<D>>& g_coef = gradient.coef;
+  const std::vector<double>& wall_weight = walls.weights();
+  const std::vector<double>& wall_offset = walls.offsets();
+  // Exact rows are weighted by the particle volume V_i (relative to the mean), which makes the
+  // matrix V div_h G = D M^-1 D^T V-weighted symmetric (divergence_cleaning.cpp).
+  double mean_volume = 0;
+  if (exact) {
+    for (std::size_t r = 0; r < rows; ++r) mean_volume += m[particle_of[r]] / rho[particle_of[r]];
+    mean_volume = rows ? mean_volume / static_cast<double>(rows) : 1.0;
+  }
+  const double rho0 = rho0_;
+
+  sys.kernel.visit([&](auto shape) {
+#pragma omp parallel num_threads(threads)
+    {
+      const std::size_t t = static_cast<std::size_t>(omp_get_thread_num());
+      const std::size_t nt = static_cast<std::size_t>(omp_get_num_threads());
+      RowBuffer& rb = rows_[t];
+      if (rb.slot.size() < rows) rb.slot.assign(rows, -1);
+      rb.cols.clear();
+      rb.vals.clear();
+      rb.lengths.clear();
+      std::vector<std::pair<int, double>> sorted;
+      const std::size_t r0 = rows * t / nt, r1 = rows * (t + 1) / nt;
+      // Sort the row by column; reset the slots.
+      auto finishRow = [&](std::size_t row_begin) {
+        const std::size_t len = rb.cols.size() - row_begin;
+        sorted.resize(len);
+        for (std::size_t q = 0; q < len; ++q) {
+          sorted[q] = {rb.cols[row_begin + q], rb.vals[row_begin + q]};
+          rb.slot[static_cast<std::size_t>(rb.cols[row_begin + q])] = -1;
+        }
+        std::sort(sorted.begin(), sorted.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+        for (std::size_t q = 0; q < len; ++q) {
+          rb.cols[row_begin + q] = sorted[q].first;
+          rb.vals[row_begin + q] = sorted[q].second;
+        }
+        rb.lengths.push_back(static_cast<int>(len));
+      };
+      for (std::size_t r = r0; r < r1; ++r) {
+        const std::size_t i = static_cast<std::size_t>(particle_of[r]);
+        const std::size_t row_begin = rb.cols.size();
+        double constant = 0;  // the wall pressures' hydrostatic parts, moved to the right side
+        double l_old = 0;     // incremental form: the operator applied to the last pressure
+        auto column = [&](int u, double value) {
+          int& s = rb.slot[static_cast<std::size_t>(u)];
+          if (s < 0) {
+            s = static_cast<int>(rb.cols.size());
+            rb.cols.push_back(u);
+            rb.vals.push_back(value);
+          } else {
+            rb.vals[static_cast<std::size_t>(s)] += value;
+          }
+        };
+        // value * p_q, q a fluid particle (an unknown, or p = 0) or a wall particle (p_w
+        // eliminated: sum_f c_wf p_f + b_w).
+        auto add = [&](std::size_t q, double value) {
+          if (carried) l_old += value * carried[q];
+          if (q < n) {
+            if (unknown_of[q] >= 0) column(unknown_of[q], value);
+            return;
+          }
+          constant += value * wall_offset[q - n];
+          for (std::size_t kk = list.start[q]; kk < list.split[q]; ++kk) {
+            const double c = wall_weight[kk];
+            const int u = unknown_of[list.nbr[kk]];
+            if (c != 0.0 && u >= 0) column(u, value * c);
+          }
+        };
+        column(static_cast<int>(r), 0.0);  // the diagonal is always stored
+        if (exact) {
+          // -rho_i div_h(G p)_i = -rho_i div(v*)_i / dt with the divergence of the continuity
+          // equation applied to the corrected velocities (walls keep theirs):
+          //   -rho_i div_h(u)_i = u_i . sum_j m_j F_ij r_ij - sum_{j moving} m_j F_ij r_ij . u_j,
+          // u_k = (G p)_k through the gradient row of k: two kernel supports wide.
+          // Row i times rho0 V_i / (rho_i V_mean): the matrix is then symmetric.
+          const double w = rho0 * m[i] / (rho[i] * rho[i] * mean_volume);
+          Vec<D> self = Vec<D>::Zero();
+          pairs.visit(shape, i, list.start[i], list.start[i + 1],
+                      [&](std::size_t, std::size_t j, const Vec<D>& rij, double, double F) {
+                        const Vec<D> a = (w * m[j] * F) * rij;
+                        self += a;
+                        if (j >= n) return;
+                        for (std::size_t e = list.start[j] + j, e1 = list.start[j + 1] + j + 1; e < e1; ++e) {
+                          const double v = -a.dot(g_coef[e]);
+                          if (v != 0.0) add(g_index[e], v);
+                        }
+                      });
+          for (std::size_t e = list.start[i] + i, e1 = list.start[i + 1] + i + 1; e < e1; ++e) {
+            const double v = self.dot(g_coef[e]);
+            if (v != 0.0) add(g_index[e], v);
+          }
+          rhs_[static_cast<Eigen::Index>(r)] = -w * rho[i] * divergence[i] * inv_dt + (l_old - constant);
+          finishRow(row_begin);
+          continue;
+        }
+        // sum_j k_ij (p_i - p_j) [- zeta_i . grad p_i] = -rho_i div(v*)_i / dt,
+        // k_ij = -8 rho_i m_j F_ij / (rho_i + rho_j)^2 > 0, zeta_i = sum_j k_ij r_ij (above).
+        Vec<D> zeta = Vec<D>::Zero();
+        double trace_m = 0;  // tr M_i = -sum_j V_j F_ij r_ij^2 (D on a full support)
+        pairs.visit(shape, i, list.start[i], list.start[i + 1],
+                    [&](std::size_t, std::size_t j, const Vec<D>& rij, double, double F) {
+                      const double s = rho[i] + rho[j];
+                      const double kij = -8.0 * rho[i] * m[j] * F / (s * s);
+                      add(i, kij);
+                      add(j, -kij);
+                      zeta += kij * rij;
+                      trace_m -= m[j] / rho[j] * F * rij.squaredNorm();
+                    });
+        if (consistent) {
+          // grad p_i = rho_i (G p)_i through the gradient row of i
+          zeta *= -rho[i];
+          const std::size_t e0 = list.start[i] + i, e1 = list.start[i + 1] + i + 1;
+          for (std::size_t e = e0; e < e1; ++e) {
+            const double v = zeta.dot(g_coef[e]);
+            if (v != 0.0) add(g_index[e], v);
+          }
+        }
+        // Consistent form: the operator scaled by D / tr M_i, so that it measures the second
+        // derivatives with the weight of a full support also where the support is truncated
+        // (near the free surface the plain sum is about half as large, and the projection
+        // over-corrected there: an instability of the surface rows, docs/theory.md).
+        const double scale = consistent && trace_m > 0 ? D / trace_m : 1.0;
+        if (scale != 1.0)
+          for (std::size_t q = row_begin; q < rb.vals.size(); ++q) rb.vals[q] *= scale;
+        rhs_[static_cast<Eigen::Index>(r)] = -rho[i] * divergence[i] * inv_dt + scale * (l_old - constant);
+        finishRow(row_begin);
+      }
+    }
+  });
+
+  // Gather the rows (threads hold consecutive row ranges) into the compressed matrix.
+  std::size_t nnz = 0;
+  for (int t = 0; t < threads; ++t) nnz += rows_[static_cast<std::size_t>(t)].cols.size();
+  SparseRowMatrix& matrix = out.matrix;
+  matrix.resize(static_cast<Eigen::Index>(rows), static_cast<Eigen::Index>(rows));
+  matrix.resizeNonZeros(static_cast<Eigen::Index>(nnz));
+  int* outer = matrix.outerIndexPtr();
+  int* inner = matrix.innerIndexPtr();
+  double* val = matrix.valuePtr();
+  std::size_t r = 0, e = 0;
+  outer[0] = 0;
+  for (int t = 0; t < threads; ++t) {
+    const RowBuffer& rb = rows_[static_cast<std::size_t>(t)];
+    std::copy(rb.cols.begin(), rb.cols.end(), inner + e);
+    std::copy(rb.vals.begin(), rb.vals.end(), val + e);
+    for (int len : rb.lengths) {
+      e += static_cast<std::size_t>(len);
+      outer[++r] = static_cast<int>(e);
+    }
+  }
+  if (exact) {
+    // The exact operator is singular along the pressure modes that the gradient annihilates
+    // (checkerboards on a regular lattice). Those modes do not move the velocity, and the
+    // source has no component along them up to round-off, which the solvers cannot reach: a
+    // relative shift of the diagonal makes the matrix definite and changes the corrected
+    // velocity's divergence by about the shift (docs/theory.md §10).
+    for (std::size_t q = 0; q < rows; ++q) matrix.coeffRef(static_cast<Eigen::Index>(q), static_cast<Eigen::Index>(q)) *= 1.0 + kExactShift;
+  }
+  out.pattern_changed = out.outer.size() != rows + 1 || out.inner.size() != nnz ||
+                        !std::equal(out.outer.begin(), out.outer.end(), outer) ||
+                        !std::equal(out.inner.begin(), out.inner.end(), inner);
+  if (out.pattern_changed) {
+    out.outer.assign(outer, outer + rows + 1);
+    out.inner.assign(inner, inner + nnz);
+    ++out.pattern_builds;
+  }
+}
+
+template <int D>
+void correctVelocities(SphSystem<D>& sys, const ProjectionOperators<D>& ops, double dt, double* y, const double* p,
+                       const double* p_old) {
+  ParticleSet<D>& P = sys.particles;
+  const NeighbourList<D>& list = sys.neighbours;
+  const std::size_t n = P.n_moving;
+  double* yv = y + n * (D + 1);
+  std::vector<double>& correction = ops.correction;
+#pragma omp parallel for schedule(static) if (n >= kParallelMinimum)
+  for (std::size_t k = 0; k < n; ++k) {
+    const Vec<D> a = ops.gradient.at(list, k, p, p_old);
+    for (int c = 0; c < D; ++c) {
+      yv[D * k + c] -= dt * a[c];
+      P.velocity[D * k + c] = yv[D * k + c];
+      correction[D * k + c] += a[c];
+    }
+  }
+}
+
+#define VESPH_INSTANTIATE_PRESSURE_SYSTEM(D)                                                                  \
+  template void continuityDivergence<D>(SphSystem<D>&, const WallFlux<D>&, std::vector<double>&);             \
+  template struct GradientRows<D>;                                                                             \
+  template class PressureSystem<D>;                                                                            \
+  template void correctVelocities<D>(SphSystem<D>&, const ProjectionOperators<D>&, double, double*, const double*, \
+                                     const double*);
+VESPH_INSTANTIATE_PRESSURE_SYSTEM(2)
+VESPH_INSTANTIATE_PRESSURE_SYSTEM(3)
+#undef VESPH_INSTANTIATE_PRESSURE_SYSTEM
+
+}  // namespace vesph::isph
