@@ -49,7 +49,7 @@ struct CandidateGeometry {
 };
 
 template <int D>
-CandidateGeometry<D> candidateGeometry(const SphSystem<D>& sys) {
+CandidateGeometry<D> candidateGeometry(const StepContext<D>& sys) {
   const Kernel& k = sys.kernel;
   return {sys.particles.position.data(), &sys.domain, k.supportRadius() * k.supportRadius(), 1.0 / k.h, k.w_scale,
           k.dw_scale / k.h};
@@ -137,10 +137,9 @@ void Projection<D>::setup(Setup<D>& s) {
 }
 
 template <int D>
-void Projection<D>::flagFreeSurface(SphSystem<D>& sys, double t) {
+void Projection<D>::flagFreeSurface(StepContext<D>& sys, double t) {
   if (!free_surface_effect_) {
-    for (auto& e : sys.effects)
-      if (e->name() == "free_surface") free_surface_effect_ = e.get();
+    free_surface_effect_ = sys.findEffect("free_surface");
     surface_flag_ = sys.particles.fields.find("free_surface");
   }
   if (!free_surface_effect_) return;
@@ -150,7 +149,7 @@ void Projection<D>::flagFreeSurface(SphSystem<D>& sys, double t) {
 }
 
 template <int D>
-void Projection<D>::numberUnknowns(const SphSystem<D>& sys) {
+void Projection<D>::numberUnknowns(const StepContext<D>& sys) {
   const std::size_t n = sys.particles.n_moving;
   unknown_of_.assign(n, -1);
   particle_of_.clear();
@@ -169,7 +168,7 @@ void Projection<D>::numberUnknowns(const SphSystem<D>& sys) {
 }
 
 template <int D>
-void Projection<D>::wallNormals(SphSystem<D>& sys) {
+void Projection<D>::wallNormals(StepContext<D>& sys) {
   // n_i = -sum_w V_w grad_i W_iw / |.|: away from the wall particles in i's support (for a
   // particle over a flat wall the wall's normal, also at the edge of a spreading film, where the
   // wall extends on both sides of it; at a corner the bisector). Zero without wall neighbours.
@@ -196,7 +195,7 @@ void Projection<D>::wallNormals(SphSystem<D>& sys) {
 }
 
 template <int D>
-void Projection<D>::wallExtrapolation(const SphSystem<D>& sys, double dt, bool inlet_data) {
+void Projection<D>::wallExtrapolation(const StepContext<D>& sys, double dt, bool inlet_data) {
   const ParticleSet<D>& P = sys.particles;
   const NeighbourList<D>& list = sys.neighbours;
   const std::size_t n = P.n_moving, N = P.size();
@@ -259,7 +258,7 @@ void Projection<D>::wallExtrapolation(const SphSystem<D>& sys, double dt, bool i
 }
 
 template <int D>
-void Projection<D>::wallsAndSource(SphSystem<D>& sys, double dt, bool whole_pressure, bool inlet_data) {
+void Projection<D>::wallsAndSource(StepContext<D>& sys, double dt, bool whole_pressure, bool inlet_data) {
   // The walls' Neumann data and the source divergence of the velocity in P.velocity (header,
   // step 2). Solving for the whole pressure (plain and predictor forms, the initial pressure),
   // the hydrostatic wall offsets answer the body force's share dt g of that velocity, so the
@@ -273,11 +272,10 @@ void Projection<D>::wallsAndSource(SphSystem<D>& sys, double dt, bool whole_pres
   // is refused with the incremental form, so those solves are for the whole pressure.)
   const bool inlet = velocity_inlet_ && inlet_data;
   if (inlet && inflow_direction_.isZero()) {
-    // The scene has a prescribed inflow buffer (checked at setup, src/sim/simulation.cpp); its
+    // The scene has a prescribed inflow buffer (checked at setup, src/sim/scheme_isph.cpp); its
     // direction does not change.
-    for (const auto& h : sys.hooks)
-      if (const auto* flow = dynamic_cast<const InflowOutflow<D>*>(h.get()); flow && flow->hasBuffer())
-        inflow_direction_ = flow->flowDirection();
+    if (const auto* flow = sys.template findHook<InflowOutflow<D>>(); flow && flow->hasBuffer())
+      inflow_direction_ = flow->flowDirection();
   }
   wallExtrapolation(sys, dt, inlet);
   if (no_penetration_)
@@ -287,7 +285,7 @@ void Projection<D>::wallsAndSource(SphSystem<D>& sys, double dt, bool whole_pres
 }
 
 template <int D>
-double Projection<D>::divergence(SphSystem<D>& sys, const Vec<D>& wall_shift, bool tangential_walls, bool inlet_data) {
+double Projection<D>::divergence(StepContext<D>& sys, const Vec<D>& wall_shift, bool tangential_walls, bool inlet_data) {
   const ParticleSet<D>& P = sys.particles;
   const std::size_t n = P.n_moving;
   divergence_.resize(n);
@@ -325,7 +323,7 @@ double Projection<D>::divergence(SphSystem<D>& sys, const Vec<D>& wall_shift, bo
 }
 
 template <int D>
-void Projection<D>::gradientRows(SphSystem<D>& sys, Gradient form, bool walls_enter) {
+void Projection<D>::gradientRows(StepContext<D>& sys, Gradient form, bool walls_enter) {
   const ParticleSet<D>& P = sys.particles;
   const NeighbourList<D>& list = sys.neighbours;
   const std::size_t n = P.n_moving;
@@ -377,7 +375,7 @@ void Projection<D>::gradientRows(SphSystem<D>& sys, Gradient form, bool walls_en
 }
 
 template <int D>
-void Projection<D>::assemble(SphSystem<D>& sys, double dt, Laplacian op, bool incremental, Assembled& out) {
+void Projection<D>::assemble(StepContext<D>& sys, double dt, Laplacian op, bool incremental, Assembled& out) {
   const ParticleSet<D>& P = sys.particles;
   const NeighbourList<D>& list = sys.neighbours;
   const std::size_t n = P.n_moving, rows = n_unknowns_;
@@ -562,7 +560,7 @@ void Projection<D>::assemble(SphSystem<D>& sys, double dt, Laplacian op, bool in
 }
 
 template <int D>
-void Projection<D>::correct(SphSystem<D>& sys, double dt, double* y, bool cleaning) {
+void Projection<D>::correct(StepContext<D>& sys, double dt, double* y, bool cleaning) {
   ParticleSet<D>& P = sys.particles;
   const NeighbourList<D>& list = sys.neighbours;
   const std::size_t n = P.n_moving;
@@ -589,7 +587,7 @@ void Projection<D>::correct(SphSystem<D>& sys, double dt, double* y, bool cleani
 }
 
 template <int D>
-void Projection<D>::clean(SphSystem<D>& sys, double t, double dt, double* y) {
+void Projection<D>::clean(StepContext<D>& sys, double t, double dt, double* y) {
   // The exact projection of the corrected velocities (header): the source is their divergence
   // at the same positions (walls at rest), the gradient the adjoint of that divergence (thesis
   // eq. 3.18 without wall pressures), the multiplier is not a pressure and is not stored.
@@ -609,7 +607,7 @@ void Projection<D>::clean(SphSystem<D>& sys, double t, double dt, double* y) {
 }
 
 template <int D>
-void Projection<D>::correctPositions(SphSystem<D>& sys, double dt, double* y) {
+void Projection<D>::correctPositions(StepContext<D>& sys, double dt, double* y) {
   ParticleSet<D>& P = sys.particles;
   const std::size_t n = P.n_moving;
   const double half_dt2 = 0.5 * dt * dt;
@@ -621,7 +619,7 @@ void Projection<D>::correctPositions(SphSystem<D>& sys, double dt, double* y) {
 }
 
 template <int D>
-void Projection<D>::storePressure(const SphSystem<D>& sys) {
+void Projection<D>::storePressure(const StepContext<D>& sys) {
   // Fluid: the solution on the unknowns, 0 on the free surface (and the pinned particle);
   // walls: the extrapolation p_w = sum_f c_wf p_f + b_w of the header.
   const std::size_t n = sys.particles.n_moving, N = sys.particles.size();
@@ -637,7 +635,7 @@ void Projection<D>::storePressure(const SphSystem<D>& sys) {
 }
 
 template <int D>
-void Projection<D>::start(SphSystem<D>& sys, double t, double* y) {
+void Projection<D>::start(StepContext<D>& sys, double t, double* y) {
   if (!incremental_) return;
   ParticleSet<D>& P = sys.particles;
   const std::size_t n = P.n_moving;
@@ -663,7 +661,7 @@ void Projection<D>::start(SphSystem<D>& sys, double t, double* y) {
 }
 
 template <int D>
-void Projection<D>::apply(SphSystem<D>& sys, double t, double dt, double* y) {
+void Projection<D>::apply(StepContext<D>& sys, double t, double dt, double* y) {
   const auto t0 = Clock::now();
   ParticleSet<D>& P = sys.particles;
   const std::size_t N = P.size();

@@ -114,7 +114,7 @@
 
 #include "vesph/io/config.hpp"
 #include "vesph/isph/linear_solver.hpp"
-#include "vesph/sim/step_hook.hpp"
+#include "vesph/physics/step_hook.hpp"
 
 namespace vesph {
 
@@ -126,12 +126,12 @@ class Projection final : public StepHook<D> {
   std::string_view name() const override { return "isph_projection"; }
   void setup(Setup<D>& s) override;
   bool changesState() const override { return true; }
-  void start(SphSystem<D>& system, double t, double* y) override;
-  void apply(SphSystem<D>& system, double t, double dt, double* y) override;
+  void start(StepContext<D>& system, double t, double* y) override;
+  void apply(StepContext<D>& system, double t, double dt, double* y) override;
   // The incremental form keeps the last pressure per particle: it follows the particles when
   // an inflow or outflow changes the set (a released particle starts from its buffer
   // particle's pressure).
-  void resized(SphSystem<D>& system, const ParticleRemap& remap) override {
+  void resized(StepContext<D>& system, const ParticleRemap& remap) override {
     if (previous_pressure_.size() == remap.old_size) remap.apply(previous_pressure_, 1, Field::Range::all);
   }
   // Checkpoints keep the pressure field (the incremental form's p^n, the iterative solvers'
@@ -159,13 +159,13 @@ class Projection final : public StepHook<D> {
     double assembly_seconds = 0, solve_seconds = 0, divergence_before = 0, divergence_after = 0;
     double divergence_projected = 0, cleaning_seconds = 0;
   };
-  void flagFreeSurface(SphSystem<D>& sys, double t);
-  void numberUnknowns(const SphSystem<D>& sys);
+  void flagFreeSurface(StepContext<D>& sys, double t);
+  void numberUnknowns(const StepContext<D>& sys);
   // inlet_data (wallExtrapolation, wallsAndSource, divergence): the inflow buffer as a velocity
   // inlet (solver.inlet_condition = "velocity") in this solve.
-  void wallExtrapolation(const SphSystem<D>& sys, double dt, bool inlet_data);
-  void wallNormals(SphSystem<D>& sys);
-  void wallsAndSource(SphSystem<D>& sys, double dt, bool whole_pressure, bool inlet_data);
+  void wallExtrapolation(const StepContext<D>& sys, double dt, bool inlet_data);
+  void wallNormals(StepContext<D>& sys);
+  void wallsAndSource(StepContext<D>& sys, double dt, bool whole_pressure, bool inlet_data);
   // One assembled matrix with the record of its sparsity pattern (the direct solvers keep their
   // symbolic analysis while it holds): the pressure equation's, and the cleaning's.
   struct Assembled {
@@ -176,15 +176,15 @@ class Projection final : public StepHook<D> {
   };
   enum class Gradient { renormalised, difference, symmetric };
   enum class Laplacian { consistent, morris, exact };
-  void gradientRows(SphSystem<D>& sys, Gradient form, bool walls_enter);
-  void assemble(SphSystem<D>& sys, double dt, Laplacian op, bool incremental, Assembled& out);
+  void gradientRows(StepContext<D>& sys, Gradient form, bool walls_enter);
+  void assemble(StepContext<D>& sys, double dt, Laplacian op, bool incremental, Assembled& out);
   Laplacian operator_() const { return consistent_ ? Laplacian::consistent : Laplacian::morris; }
-  void clean(SphSystem<D>& sys, double t, double dt, double* y);
-  double divergence(SphSystem<D>& sys, const Vec<D>& wall_shift, bool tangential_walls = false,
+  void clean(StepContext<D>& sys, double t, double dt, double* y);
+  double divergence(StepContext<D>& sys, const Vec<D>& wall_shift, bool tangential_walls = false,
                     bool inlet_data = false);
-  void correct(SphSystem<D>& sys, double dt, double* y, bool cleaning);
-  void correctPositions(SphSystem<D>& sys, double dt, double* y);
-  void storePressure(const SphSystem<D>& sys);
+  void correct(StepContext<D>& sys, double dt, double* y, bool cleaning);
+  void correctPositions(StepContext<D>& sys, double dt, double* y);
+  void storePressure(const StepContext<D>& sys);
 
   LinearSolverOptions options_;
   Gradient gradient_ = Gradient::renormalised;
