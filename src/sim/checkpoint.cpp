@@ -128,7 +128,13 @@ Checkpoint Checkpoints<D>::resume(const std::string& dir, const ResumeRules& rul
     throw InputError("--resume: the scene differs from the one " + where_ + " was written with at '" + diff +
                      "'; only [time], [output], [checks] and [integrator] may change between the segments of a run");
   Checkpoint& ck = src.checkpoint;
+  // The particle set's restore reads the checkpoint's ids and names the file (messages), while
+  // this function runs.
   resuming_ = &ck;
+  struct ClearOnExit {
+    const Checkpoint*& slot;
+    ~ClearOnExit() { slot = nullptr; }
+  } clear_on_exit{resuming_};
   if (!(ck.time < rules.end_time * (1 + 1e-12)))
     throw InputError("--resume: the checkpoint is at t = " + std::to_string(ck.time) + " s, beyond time.end = " +
                      std::to_string(rules.end_time) + " s; raise time.end to go on");
@@ -141,7 +147,6 @@ Checkpoint Checkpoints<D>::resume(const std::string& dir, const ResumeRules& rul
   restore(ck, RestoreStage::scene);
   state_.values() = std::move(ck.state);
   system_.unpack(state_.data());
-  resuming_ = nullptr;
   return std::move(src.checkpoint);
 }
 
