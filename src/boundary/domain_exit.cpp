@@ -1,11 +1,14 @@
 #include "vesph/boundary/domain_exit.hpp"
 
-#include "vesph/sim/system.hpp"
+#include <memory>
+
+#include "vesph/boundary/registry.hpp"
+
 
 namespace vesph {
 
 template <int D>
-void DomainExit<D>::apply(SphSystem<D>& system, double, double, double* y) {
+void DomainExit<D>::apply(StepContext<D>& system, double, double, double* y) {
   remove_.clear();
   const std::size_t n = system.particles.n_moving;
   for (std::size_t i = 0; i < n; ++i)
@@ -13,12 +16,12 @@ void DomainExit<D>::apply(SphSystem<D>& system, double, double, double* y) {
 }
 
 template <int D>
-void DomainExit<D>::collectChanges(const SphSystem<D>&, ParticleChanges& out) {
+void DomainExit<D>::collectChanges(const StepContext<D>&, ParticleChanges& out) {
   out.remove.insert(out.remove.end(), remove_.begin(), remove_.end());
 }
 
 template <int D>
-void DomainExit<D>::resized(SphSystem<D>&, const ParticleRemap&) {
+void DomainExit<D>::resized(StepContext<D>&, const ParticleRemap&) {
   escaped_ += remove_.size();
   remove_.clear();
 }
@@ -51,6 +54,18 @@ void DomainExit<D>::restoreCarried(const ArrayLookup& find) {
   if (e && e->size() != 1) throw InputError("--resume: the checkpoint's count of escaped particles is malformed");
   escaped_ = e ? static_cast<std::uint64_t>((*e)[0]) : 0;
 }
+
+// What happens to a fluid particle that leaves the domain ([checks] leave_domain; registered in
+// src/boundary/registry.cpp): the run stops (a numerical failure, the default) or the particle
+// is removed and counted (splashes).
+template <int D>
+void buildDomainExit(BoundaryBuild<D>& b) {
+  b.facts.removes_leaving = b.root.table("checks").choice("leave_domain", "stop", {"stop", "remove"}) == "remove";
+  if (b.facts.removes_leaving) b.hooks.push_back(std::make_unique<DomainExit<D>>());
+}
+
+template void buildDomainExit<2>(BoundaryBuild<2>&);
+template void buildDomainExit<3>(BoundaryBuild<3>&);
 
 template class DomainExit<2>;
 template class DomainExit<3>;

@@ -1,4 +1,5 @@
 #include "vesph/boundary/dummy_walls.hpp"
+#include "vesph/boundary/registry.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -225,5 +226,21 @@ void DummyWalls<D>::resized(const ParticleRemap& remap) {
 
 template class DummyWalls<2>;
 template class DummyWalls<3>;
+
+}  // namespace vesph
+
+namespace vesph {
+
+// The walls of the scene's blocks (src/boundary/registry.cpp): every fixed particle is a wall
+// particle, the inflow buffer's too (it is built before: no image treatment for it).
+template <int D>
+void buildDummyWalls(BoundaryBuild<D>& b) {
+  if (!b.wall_points.empty()) b.wall_points.resize(b.particles.nFixed());
+  if (b.particles.nFixed() > 0)
+    b.boundaries.push_back(std::make_unique<DummyWalls<D>>(b.wall_points, b.facts.extrapolated_inflow));
+}
+
+template void buildDummyWalls<2>(BoundaryBuild<2>&);
+template void buildDummyWalls<3>(BoundaryBuild<3>&);
 
 }  // namespace vesph

@@ -1,12 +1,14 @@
 #include "vesph/boundary/inflow_outflow.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <numbers>
 #include <sstream>
 #include <tuple>
 
-#include "vesph/sim/system.hpp"
+#include "vesph/boundary/registry.hpp"
+
 
 namespace vesph {
 
@@ -187,7 +189,7 @@ double InflowOutflow<D>::rampIntegral(double t) const {
 }
 
 template <int D>
-void InflowOutflow<D>::apply(SphSystem<D>& system, double t, double dt, double* y) {
+void InflowOutflow<D>::apply(StepContext<D>& system, double t, double dt, double* y) {
   ParticleSet<D>& p = system.particles;
   const std::size_t n0 = p.n_moving;
   release_.clear();
@@ -223,13 +225,13 @@ void InflowOutflow<D>::apply(SphSystem<D>& system, double t, double dt, double* 
 }
 
 template <int D>
-void InflowOutflow<D>::collectChanges(const SphSystem<D>&, ParticleChanges& out) {
+void InflowOutflow<D>::collectChanges(const StepContext<D>&, ParticleChanges& out) {
   out.remove.insert(out.remove.end(), remove_.begin(), remove_.end());
   out.release.insert(out.release.end(), release_.begin(), release_.end());
 }
 
 template <int D>
-void InflowOutflow<D>::resized(SphSystem<D>& system, const ParticleRemap& remap) {
+void InflowOutflow<D>::resized(StepContext<D>& system, const ParticleRemap& remap) {
   // A released buffer particle goes back by the buffer depth: its lane keeps its spacing.
   ParticleSet<D>& p = system.particles;
   for (std::size_t off : released_offsets_) p.position[D * (remap.newMoving() + off) + axis_] -= sign_ * depth_;
@@ -307,6 +309,33 @@ std::string InflowOutflow<D>::describe() const {
        << (out_sign_ > 0 ? "+" : "-") << axes[out_axis_] << ") are removed\n";
   return os.str();
 }
+
+// [inflow] and [outflow] (src/boundary/registry.cpp): the buffer particles appended after every
+// other particle, with ids after theirs; the hook runs after the pressure scheme's.
+template <int D>
+void buildInflowOutflow(BoundaryBuild<D>& b) {
+  std::uint64_t next_id = 0;
+  for (std::uint64_t ident : b.particles.id) next_id = std::max(next_id, ident + 1);
+  auto flow = InflowOutflow<D>::fromConfig(b.root, b.particles, b.domain, b.spacing, b.rest_density, b.support,
+                                           next_id);
+  if (!flow) return;
+  b.facts.open = true;
+  b.facts.inflow_buffer = flow->hasBuffer();
+  b.facts.extrapolated_inflow = flow->extrapolatedVelocity();
+  b.facts.prescribed_peak_speed = flow->prescribedPeakSpeed();
+  if (flow->hasBuffer()) {
+    const Vec<D> e = flow->flowDirection();
+    for (int a = 0; a < D; ++a)
+      if (e[a] != 0) {
+        b.facts.inflow_axis = a;
+        b.facts.inflow_sign = e[a];
+      }
+  }
+  b.hooks.push_back(std::move(flow));
+}
+
+template void buildInflowOutflow<2>(BoundaryBuild<2>&);
+template void buildInflowOutflow<3>(BoundaryBuild<3>&);
 
 template class InflowOutflow<2>;
 template class InflowOutflow<3>;

@@ -21,7 +21,7 @@ template <int D>
 DivergenceCleaning<D>::DivergenceCleaning(const LinearSolverOptions& options) : solver_(makeLinearSolver(options)) {}
 
 template <int D>
-void DivergenceCleaning<D>::apply(SphSystem<D>& sys, const ProjectionOperators<D>& ops, double t, double dt, double* y) {
+void DivergenceCleaning<D>::apply(StepContext<D>& sys, const ProjectionOperators<D>& ops, double t, double dt, double* y) {
   // The source is the corrected velocities' divergence at the same positions (walls at rest),
   // the gradient the adjoint of that divergence (thesis eq. 3.18 without wall pressures).
   ops.gradient.build(sys, GradientForm::symmetric, WallPressures::excluded);

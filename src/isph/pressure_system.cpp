@@ -80,7 +80,7 @@ double PressureUnknowns::rms(const std::vector<double>& per_particle) const {
 }
 
 template <int D>
-void continuityDivergence(SphSystem<D>& sys, const WallFlux<D>& walls, std::vector<double>& out) {
+void continuityDivergence(StepContext<D>& sys, const WallFlux<D>& walls, std::vector<double>& out) {
   const ParticleSet<D>& P = sys.particles;
   const std::size_t n = P.n_moving;
   out.resize(n);
@@ -118,7 +118,7 @@ void continuityDivergence(SphSystem<D>& sys, const WallFlux<D>& walls, std::vect
 }
 
 template <int D>
-void GradientRows<D>::build(SphSystem<D>& sys, GradientForm form, WallPressures walls) {
+void GradientRows<D>::build(StepContext<D>& sys, GradientForm form, WallPressures walls) {
   const ParticleSet<D>& P = sys.particles;
   const NeighbourList<D>& list = sys.neighbours;
   const std::size_t n = P.n_moving;
@@ -173,7 +173,7 @@ void GradientRows<D>::build(SphSystem<D>& sys, GradientForm form, WallPressures 
 }
 
 template <int D>
-void PressureSystem<D>::assemble(SphSystem<D>& sys, double dt, LaplacianForm form, const PressureUnknowns& unknowns,
+void PressureSystem<D>::assemble(StepContext<D>& sys, double dt, LaplacianForm form, const PressureUnknowns& unknowns,
                                  const GradientRows<D>& gradient, const WallConditions<D>& walls,
                                  const std::vector<double>& divergence, const double* carried, AssembledMatrix& out) {
   const ParticleSet<D>& P = sys.particles;
@@ -361,7 +361,7 @@ void PressureSystem<D>::assemble(SphSystem<D>& sys, double dt, LaplacianForm for
 }
 
 template <int D>
-void correctVelocities(SphSystem<D>& sys, const ProjectionOperators<D>& ops, double dt, double* y, const double* p,
+void correctVelocities(StepContext<D>& sys, const ProjectionOperators<D>& ops, double dt, double* y, const double* p,
                        const double* p_old) {
   ParticleSet<D>& P = sys.particles;
   const NeighbourList<D>& list = sys.neighbours;
@@ -380,10 +380,10 @@ void correctVelocities(SphSystem<D>& sys, const ProjectionOperators<D>& ops, dou
 }
 
 #define VESPH_INSTANTIATE_PRESSURE_SYSTEM(D)                                                                  \
-  template void continuityDivergence<D>(SphSystem<D>&, const WallFlux<D>&, std::vector<double>&);             \
+  template void continuityDivergence<D>(StepContext<D>&, const WallFlux<D>&, std::vector<double>&);             \
   template struct GradientRows<D>;                                                                             \
   template class PressureSystem<D>;                                                                            \
-  template void correctVelocities<D>(SphSystem<D>&, const ProjectionOperators<D>&, double, double*, const double*, \
+  template void correctVelocities<D>(StepContext<D>&, const ProjectionOperators<D>&, double, double*, const double*, \
                                      const double*);
 VESPH_INSTANTIATE_PRESSURE_SYSTEM(2)
 VESPH_INSTANTIATE_PRESSURE_SYSTEM(3)

@@ -125,7 +125,7 @@ void Projection<D>::setup(Setup<D>& s) {
 }
 
 template <int D>
-void Projection<D>::flagFreeSurface(SphSystem<D>& sys, double t) {
+void Projection<D>::flagFreeSurface(StepContext<D>& sys, double t) {
   if (!free_surface_.effect) return;
   if (!free_surface_.flag) free_surface_.flag = sys.particles.fields.find("free_surface");
   const RhsContext<D> ctx{sys.particles, sys.kernel, sys.domain, t, nullptr, nullptr, nullptr, nullptr};
@@ -134,12 +134,12 @@ void Projection<D>::flagFreeSurface(SphSystem<D>& sys, double t) {
 }
 
 template <int D>
-void Projection<D>::numberUnknowns(const SphSystem<D>& sys) {
+void Projection<D>::numberUnknowns(const StepContext<D>& sys) {
   unknowns_->number(sys.particles.n_moving, free_surface_.flag ? free_surface_.flag->data.data() : nullptr);
 }
 
 template <int D>
-void Projection<D>::correctPositions(SphSystem<D>& sys, double dt, double* y) {
+void Projection<D>::correctPositions(StepContext<D>& sys, double dt, double* y) {
   ParticleSet<D>& P = sys.particles;
   const std::size_t n = P.n_moving;
   const double half_dt2 = 0.5 * dt * dt;
@@ -151,7 +151,7 @@ void Projection<D>::correctPositions(SphSystem<D>& sys, double dt, double* y) {
 }
 
 template <int D>
-void Projection<D>::storePressure(const SphSystem<D>& sys) {
+void Projection<D>::storePressure(const StepContext<D>& sys) {
   // Fluid: the solution on the unknowns, 0 on the free surface (and the pinned particle);
   // walls: the extrapolation p_w = sum_f c_wf p_f + b_w (src/isph/wall_conditions.cpp).
   const std::size_t n = sys.particles.n_moving, N = sys.particles.size();
@@ -169,7 +169,7 @@ void Projection<D>::storePressure(const SphSystem<D>& sys) {
 }
 
 template <int D>
-void Projection<D>::start(SphSystem<D>& sys, double t, double* y) {
+void Projection<D>::start(StepContext<D>& sys, double t, double* y) {
   if (carried_ == CarriedPressure::none) return;
   ParticleSet<D>& P = sys.particles;
   const std::size_t n = P.n_moving;
@@ -199,7 +199,7 @@ void Projection<D>::start(SphSystem<D>& sys, double t, double* y) {
 }
 
 template <int D>
-void Projection<D>::predictorStep(SphSystem<D>& sys, double dt) {
+void Projection<D>::predictorStep(StepContext<D>& sys, double dt) {
   // The carried pressure only predicted the stages' pressure force: take its share out of v*
   // (v** = v* + dt G p^n) and solve for the whole pressure.
   const double* pn = pressure_->data.data();
@@ -215,7 +215,7 @@ void Projection<D>::predictorStep(SphSystem<D>& sys, double dt) {
 }
 
 template <int D>
-void Projection<D>::relaxDensity(SphSystem<D>& sys, double dt) {
+void Projection<D>::relaxDensity(StepContext<D>& sys, double dt) {
   // Density-invariant part of the source (Shao & Lo 2003; mixed with the divergence source as
   // Asai et al. 2012): the projected velocity's divergence is made (n_i/n_0 - 1)/tau instead
   // of zero, so that a particle packed closer than the lattice (n_i > n_0, the number
@@ -232,7 +232,7 @@ void Projection<D>::relaxDensity(SphSystem<D>& sys, double dt) {
 }
 
 template <int D>
-void Projection<D>::apply(SphSystem<D>& sys, double t, double dt, double* y) {
+void Projection<D>::apply(StepContext<D>& sys, double t, double dt, double* y) {
   const auto t0 = Clock::now();
   ParticleSet<D>& P = sys.particles;
   const std::size_t N = P.size();

@@ -17,7 +17,7 @@
 
 #include "vesph/isph/linear_solver.hpp"
 #include "vesph/isph/projection.hpp"
-#include "vesph/sim/system.hpp"
+#include "vesph/physics/step_hook.hpp"
 
 namespace vesph::isph {
 
@@ -56,7 +56,7 @@ struct WallFlux {
 // The continuity divergence (Fang eq. 26) of P.velocity at every moving particle into `out`:
 //   div(v)_i = -(1/rho_i) sum_j m_j (v_i - v_j) . grad_i W_ij.
 template <int D>
-void continuityDivergence(SphSystem<D>& sys, const WallFlux<D>& walls, std::vector<double>& out);
+void continuityDivergence(StepContext<D>& sys, const WallFlux<D>& walls, std::vector<double>& out);
 
 // The pressure acceleration G p of each moving particle k as a linear combination of the
 // pressures of k and its candidates: entries [start[k] + k, start[k+1] + k + 1) of the
@@ -66,7 +66,7 @@ struct GradientRows {
   std::vector<Index> index;
   std::vector<Vec<D>> coef;
 
-  void build(SphSystem<D>& sys, GradientForm form, WallPressures walls);
+  void build(StepContext<D>& sys, GradientForm form, WallPressures walls);
   // (G p)_k; with p_old, (G (p - p_old))_k.
   Vec<D> at(const NeighbourList<D>& list, std::size_t k, const double* p, const double* p_old = nullptr) const {
     Vec<D> a = Vec<D>::Zero();
@@ -97,7 +97,7 @@ class WallConditions {
   // divergence into `divergence` (left as it is where the walls enter at rest: hydrostatic
   // walls, solving for the increment). inlet: the velocity inlet's data in this solve (nullptr
   // at the initial solve, whose P.velocity holds an acceleration).
-  void prepare(SphSystem<D>& sys, double dt, SolvedFor solved_for, const VelocityInlet<D>* inlet,
+  void prepare(StepContext<D>& sys, double dt, SolvedFor solved_for, const VelocityInlet<D>* inlet,
                std::vector<double>& divergence);
 
   // Extrapolation weights c_wf = W_wf / sum W, by neighbour-list entry of the wall particle's
@@ -106,8 +106,8 @@ class WallConditions {
   const std::vector<double>& offsets() const { return offset_; }
 
  private:
-  void computeNormals(SphSystem<D>& sys);
-  void extrapolate(const SphSystem<D>& sys, double dt, const VelocityInlet<D>* inlet);
+  void computeNormals(StepContext<D>& sys);
+  void extrapolate(const StepContext<D>& sys, double dt, const VelocityInlet<D>* inlet);
 
   WallCondition condition_;
   std::optional<VelocityInlet<D>> inlet_;
@@ -135,7 +135,7 @@ class PressureSystem {
   // The rows of `form` into out.matrix and rhs(): divergence per moving particle; carried:
   // the last pressure whose operator goes to the right-hand side (the incremental form's
   // L p^n), or nullptr.
-  void assemble(SphSystem<D>& sys, double dt, LaplacianForm form, const PressureUnknowns& unknowns,
+  void assemble(StepContext<D>& sys, double dt, LaplacianForm form, const PressureUnknowns& unknowns,
                 const GradientRows<D>& gradient, const WallConditions<D>& walls, const std::vector<double>& divergence,
                 const double* carried, AssembledMatrix& out);
   Eigen::VectorXd& rhs() { return rhs_; }
@@ -166,7 +166,7 @@ struct ProjectionOperators {
 // v <- v - dt G p (G (p - p_old) with p_old) on the moving particles, in y and P.velocity;
 // the correction G p is added to ops.correction.
 template <int D>
-void correctVelocities(SphSystem<D>& sys, const ProjectionOperators<D>& ops, double dt, double* y, const double* p,
+void correctVelocities(StepContext<D>& sys, const ProjectionOperators<D>& ops, double dt, double* y, const double* p,
                        const double* p_old);
 
 // Step 4 of the projection (solver.divergence_cleaning): the exact projection of the corrected
@@ -176,7 +176,7 @@ class DivergenceCleaning {
  public:
   explicit DivergenceCleaning(const LinearSolverOptions& options);
   // ops.divergence holds the corrected velocities' divergence at the same positions.
-  void apply(SphSystem<D>& sys, const ProjectionOperators<D>& ops, double t, double dt, double* y);
+  void apply(StepContext<D>& sys, const ProjectionOperators<D>& ops, double t, double dt, double* y);
   const SolveReport& last() const { return last_; }
   std::string solverName() const { return solver_->name(); }
   // Totals (summary.json, checkpoints); seconds is kept by the projection, which times it.

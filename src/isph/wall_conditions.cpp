@@ -39,7 +39,7 @@
 namespace vesph::isph {
 
 template <int D>
-void WallConditions<D>::prepare(SphSystem<D>& sys, double dt, SolvedFor solved_for, const VelocityInlet<D>* inlet,
+void WallConditions<D>::prepare(StepContext<D>& sys, double dt, SolvedFor solved_for, const VelocityInlet<D>* inlet,
                                 std::vector<double>& divergence) {
   // The walls' Neumann data and the source divergence of the velocity in P.velocity. Solving
   // for the whole pressure (plain and predictor forms, the initial pressure), the hydrostatic
@@ -57,7 +57,7 @@ void WallConditions<D>::prepare(SphSystem<D>& sys, double dt, SolvedFor solved_f
 }
 
 template <int D>
-void WallConditions<D>::computeNormals(SphSystem<D>& sys) {
+void WallConditions<D>::computeNormals(StepContext<D>& sys) {
   // n_i = -sum_w V_w grad_i W_iw / |.|: away from the wall particles in i's support (for a
   // particle over a flat wall the wall's normal, also at the edge of a spreading film, where the
   // wall extends on both sides of it; at a corner the bisector). Zero without wall neighbours.
@@ -84,7 +84,7 @@ void WallConditions<D>::computeNormals(SphSystem<D>& sys) {
 }
 
 template <int D>
-void WallConditions<D>::extrapolate(const SphSystem<D>& sys, double dt, const VelocityInlet<D>* inlet) {
+void WallConditions<D>::extrapolate(const StepContext<D>& sys, double dt, const VelocityInlet<D>* inlet) {
   const ParticleSet<D>& P = sys.particles;
   const NeighbourList<D>& list = sys.neighbours;
   const std::size_t n = P.n_moving, N = P.size();

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstring>
 #include <exception>
+#include <stdexcept>
 
 namespace vesph {
 
@@ -206,12 +207,31 @@ StabilitySnapshot SphSystem<D>::stability() const {
 }
 
 template <int D>
+StepContext<D>& SphSystem<D>::stepContext() {
+  context_.emplace(particles, domain, kernel, neighbours, driver, *this, effects, hooks, body_acceleration_);
+  return *context_;
+}
+
+template <int D>
+void SphSystem<D>::startHooks(double t, double* y) {
+  StepContext<D>& context = stepContext();
+  for (auto& hk : hooks) hk->start(context, t, y);
+}
+
+template <int D>
 bool SphSystem<D>::afterStep(double t, double dt, double* y) {
-  for (auto& hk : hooks) hk->apply(*this, t, dt, y);
+  StepContext<D>& context = stepContext();
+  for (auto& hk : hooks) hk->apply(context, t, dt, y);
   const std::size_t n = particles.n_moving;
   const AcceptedStep<D> step{t, dt, n, y, y + n * D, y + n * (D + 1)};
   for (auto& e : effects) e->afterStep(step);
-  return observer ? observer(t, dt, y) : true;
+  return true;
+}
+
+template <int D>
+double* SphSystem<D>::resizeState(double, double*) {
+  throw std::logic_error("SphSystem::resizeState: a system whose particle count changes is integrated through "
+                         "IntegratedSystem (the run's state owns the resize)");
 }
 
 template <int D>
@@ -230,12 +250,12 @@ bool SphSystem<D>::resizePending() const {
 }
 
 template <int D>
-double* SphSystem<D>::resizeState(double t, double* y) {
-  if (!state_buffer) throw std::logic_error("SphSystem::resizeState without a state buffer");
+void SphSystem<D>::rearrangeParticles(const double* y) {
   unpack(y);  // the particle set holds the accepted (and post-processed) state
   changes_.remove.clear();
   changes_.release.clear();
-  for (auto& hk : hooks) hk->collectChanges(*this, changes_);
+  StepContext<D>& context = stepContext();
+  for (auto& hk : hooks) hk->collectChanges(context, changes_);
   const std::size_t n = particles.n_moving;
   removed_flag_.assign(n, 0);
   for (Index i : changes_.remove) {
@@ -254,10 +274,6 @@ double* SphSystem<D>::resizeState(double t, double* y) {
     remap_.released_ids.push_back(next_id_++);
   }
   applyRemap();
-  state_buffer->resize(size());
-  pack(state_buffer->data());
-  if (resize_observer) resize_observer(t, state_buffer->data());
-  return state_buffer->data();
 }
 
 template <int D>
@@ -287,7 +303,8 @@ void SphSystem<D>::applyRemap() {
   particles.remapMoving(remap_);
   for (auto& e : effects) e->resized(particles, remap_);
   for (auto& b : boundaries) b->resized(remap_);
-  for (auto& hk : hooks) hk->resized(*this, remap_);
+  StepContext<D>& context = stepContext();
+  for (auto& hk : hooks) hk->resized(context, remap_);
   neighbours.update(particles, true);
   driver.prepare(neighbours);
 }

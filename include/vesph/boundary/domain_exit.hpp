@@ -11,7 +11,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "vesph/sim/step_hook.hpp"
+#include "vesph/physics/step_hook.hpp"
 
 namespace vesph {
 
@@ -19,11 +19,11 @@ template <int D>
 class DomainExit final : public StepHook<D> {
  public:
   std::string_view name() const override { return "domain_exit"; }
-  void apply(SphSystem<D>& system, double t, double dt, double* y) override;
+  void apply(StepContext<D>& system, double t, double dt, double* y) override;
   bool changesParticles() const override { return true; }
   bool pendingChanges() const override { return !remove_.empty(); }
-  void collectChanges(const SphSystem<D>& system, ParticleChanges& out) override;
-  void resized(SphSystem<D>& system, const ParticleRemap& remap) override;
+  void collectChanges(const StepContext<D>& system, ParticleChanges& out) override;
+  void resized(StepContext<D>& system, const ParticleRemap& remap) override;
   std::vector<std::string> diagnosticsColumns() const override { return {"escaped"}; }
   void diagnostics(std::vector<double>& values) const override;
   void summarize(nlohmann::json& summary) const override;

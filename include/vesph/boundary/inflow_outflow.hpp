@@ -1,9 +1,9 @@
 #pragma once
 // Open boundaries: an inflow buffer that feeds fluid at a prescribed velocity profile, and an
 // outflow plane past which fluid particles are removed (die swell, seed thesis Ch. 4; the
-// issue's "prescribed flow rate" option). A post-step hook (DESIGN.md "The shape": hooks
-// after each accepted step, "inflow"); the particle-count changes it asks for are made between
-// steps (StepHook::collectChanges, SphSystem::resizeState).
+// issue's "prescribed flow rate" option). A post-step hook (docs/architecture.md "The life of
+// one step": hooks after each accepted step, "inflow"); the particle-count changes it asks for
+// are made between steps (StepHook::collectChanges, SphSystem::rearrangeParticles).
 //
 // Inflow buffer ([inflow]): a box of fixed particles (kind 3, "inflow") on the lattice of the
 // blocks, upstream of the inlet plane (the box face the flow direction points to). Each buffer
@@ -42,7 +42,7 @@
 #include <vector>
 
 #include "vesph/io/config.hpp"
-#include "vesph/sim/step_hook.hpp"
+#include "vesph/physics/step_hook.hpp"
 
 namespace vesph {
 
@@ -56,11 +56,11 @@ class InflowOutflow final : public StepHook<D> {
                                                    double support, std::uint64_t& next_id);
 
   std::string_view name() const override { return "inflow_outflow"; }
-  void apply(SphSystem<D>& system, double t, double dt, double* y) override;
+  void apply(StepContext<D>& system, double t, double dt, double* y) override;
   bool changesParticles() const override { return true; }
   bool pendingChanges() const override { return !release_.empty() || !remove_.empty(); }
-  void collectChanges(const SphSystem<D>& system, ParticleChanges& out) override;
-  void resized(SphSystem<D>& system, const ParticleRemap& remap) override;
+  void collectChanges(const StepContext<D>& system, ParticleChanges& out) override;
+  void resized(StepContext<D>& system, const ParticleRemap& remap) override;
   std::vector<std::string> diagnosticsColumns() const override { return {"released", "removed", "fluid_particles"}; }
   void diagnostics(std::vector<double>& values) const override;
   void summarize(nlohmann::json& summary) const override;

@@ -64,7 +64,7 @@
 
 #include "vesph/io/config.hpp"
 #include "vesph/isph/linear_solver.hpp"
-#include "vesph/sim/step_hook.hpp"
+#include "vesph/physics/step_hook.hpp"
 
 namespace vesph {
 
@@ -110,12 +110,12 @@ class Projection final : public StepHook<D> {
   std::string_view name() const override { return "isph_projection"; }
   void setup(Setup<D>& s) override;
   bool changesState() const override { return true; }
-  void start(SphSystem<D>& sys, double t, double* y) override;
-  void apply(SphSystem<D>& sys, double t, double dt, double* y) override;
+  void start(StepContext<D>& sys, double t, double* y) override;
+  void apply(StepContext<D>& sys, double t, double dt, double* y) override;
   // The incremental form keeps the last pressure per particle: it follows the particles when
   // an inflow or outflow changes the set (a released particle starts from its buffer
   // particle's pressure).
-  void resized(SphSystem<D>& sys, const ParticleRemap& remap) override {
+  void resized(StepContext<D>& sys, const ParticleRemap& remap) override {
     if (previous_pressure_.size() == remap.old_size) remap.apply(previous_pressure_, 1, Field::Range::all);
   }
   // Checkpoints keep the pressure field (the incremental form's p^n, the iterative solvers'
@@ -149,14 +149,14 @@ class Projection final : public StepHook<D> {
     Effect<D>* effect = nullptr;
     const Field* flag = nullptr;
   };
-  void flagFreeSurface(SphSystem<D>& sys, double t);
-  void numberUnknowns(const SphSystem<D>& sys);
+  void flagFreeSurface(StepContext<D>& sys, double t);
+  void numberUnknowns(const StepContext<D>& sys);
   // Solves the pressure equation over dt for the velocity in P.velocity (start and apply).
-  SolveReport solvePressure(SphSystem<D>& sys, double dt, const double* carried);
-  void predictorStep(SphSystem<D>& sys, double dt);
-  void relaxDensity(SphSystem<D>& sys, double dt);
-  void correctPositions(SphSystem<D>& sys, double dt, double* y);
-  void storePressure(const SphSystem<D>& sys);
+  SolveReport solvePressure(StepContext<D>& sys, double dt, const double* carried);
+  void predictorStep(StepContext<D>& sys, double dt);
+  void relaxDensity(StepContext<D>& sys, double dt);
+  void correctPositions(StepContext<D>& sys, double dt, double* y);
+  void storePressure(const StepContext<D>& sys);
 
   // Configuration: the strategies, read from [solver] at construction; the carried pressure
   // is completed at setup (none without [effects.pressure_gradient]).

@@ -1,18 +1,25 @@
 #pragma once
-// Scene -> Simulation (DESIGN.md "The shape"). Building reads and validates every key of the
-// scene (unknown keys, wrong types, unphysical values are InputError), generates the
-// particles, constructs the effects the scene lists and nothing else, and the integrator.
-// run() integrates to the end time, writing frames at the output times, diagnostics after
-// every step and summary.json at the end, also on failure or interruption.
+// Scene -> Simulation (docs/architecture.md "The shape" and "The life of one step"). Building
+// reads and validates every key of the scene (unknown keys, wrong types, unphysical values are
+// InputError), generates the particles (src/sim/particle_generation.cpp), builds the boundaries
+// (src/boundary/registry.cpp), the effects the scene lists and nothing else
+// (src/physics/registry.cpp), the pressure scheme (src/sim/pressure_schemes.cpp) and the
+// integrator, and lists who carries what in checkpoints (src/sim/checkpoint.cpp).
+// run() (src/sim/run_loop.cpp) integrates to the end time, writing frames at the output times,
+// diagnostics after every step and summary.json at the end, also on failure or interruption.
 #include <memory>
 #include <string>
 #include <vector>
 
 #include <nlohmann/json.hpp>
 
+#include "vesph/boundary/dummy_walls.hpp"
 #include "vesph/io/config.hpp"
 #include "vesph/io/output.hpp"
-#include "vesph/boundary/dummy_walls.hpp"
+#include "vesph/sim/checkpoint.hpp"
+#include "vesph/sim/ode_state.hpp"
+#include "vesph/sim/pressure_scheme.hpp"
+#include "vesph/sim/step_checks.hpp"
 #include "vesph/sim/system.hpp"
 
 namespace vesph {
@@ -48,9 +55,14 @@ struct RunReport {
 };
 
 template <int D>
+class RunLoop;
+
+template <int D>
 class Simulation {
  public:
   Simulation(Config& config, const SceneHeader& header);
+  Simulation(const Simulation&) = delete;
+  Simulation& operator=(const Simulation&) = delete;
 
   RunReport run(const RunOptions& options);
   // Human-readable facts about the built scene (particle counts, h, sound speed, limits).
@@ -58,7 +70,7 @@ class Simulation {
 
   SphSystem<D>& system() { return system_; }
   const SphSystem<D>& system() const { return system_; }
-  const std::vector<double>& state() const { return y_; }
+  const std::vector<double>& state() const { return state_.values(); }
   Integrator& integrator() { return *integrator_; }
   double spacing() const { return dx_; }
   double restDensity() const { return rho0_; }
@@ -67,28 +79,29 @@ class Simulation {
   std::uint64_t neighbourPairsEvaluated() const { return system_.driver.pairsEvaluated(); }
 
  private:
-  void generateParticles(ConfigTable& root);
-  void markWallLayers();
-  std::vector<WallPoint<D>> wall_points_;  // per fixed particle: its wall treatment
-  DiagnosticsRow diagnostics(double t, double dt, const double* y) const;
-  std::string checkState(const DiagnosticsRow& row, const double* y) const;
-  std::vector<std::string> hookColumns() const;
-  Checkpoint resumeFrom(const std::string& dir);
+  friend class RunLoop<D>;
+  // The steps of building, in the order the scene is read (which decides the first error
+  // reported in a scene with several).
+  void readDomainKernelFluid(ConfigTable& root);
+  void buildEffects(ConfigTable& root);
+  void buildScheme(ConfigTable& root, const BoundaryFacts& facts);
+  void readOutputTimes(ConfigTable& root);
+  ReferenceScales referenceScales(double inflow_speed) const;
+  void readChecks(ConfigTable& root, double velocity_scale, bool removes_leaving);
 
   Config& config_;
   SceneHeader header_;
   SphSystem<D> system_;
+  OdeState state_;
+  std::unique_ptr<PressureScheme<D>> scheme_;
   std::unique_ptr<Integrator> integrator_;
   std::string integrator_name_;
-  std::vector<double> y_, last_good_;
-  double last_good_time_ = 0;
-  double dx_ = 0, rho0_ = 0, mu_ = 0, t_end_ = 0;
+  std::vector<WallPoint<D>> wall_points_;  // per fixed particle: its wall treatment
+  double dx_ = 0, rho0_ = 0, mu_ = 0, t_end_ = 0, skin_ = 0;
   std::vector<double> output_times_;
-  double max_density_deviation_ = 0.5, max_speed_ = 0;
-  bool leave_domain_remove_ = false;  // [checks] leave_domain = "remove" (DomainExit hook)
+  StepChecks<D> checks_;
+  Checkpoints<D> checkpoints_{system_, state_};
   std::string resolved_scene_;
-  std::string scheme_ = "wcsph";
-  mutable std::vector<double> hook_values_;
 };
 
 }  // namespace vesph

@@ -1,11 +1,19 @@
 #pragma once
-// The SPH discretisation as an ODE right-hand side (DESIGN.md "The shape"):
+// The SPH discretisation as an ODE right-hand side (docs/architecture.md "The life of one step"):
 //   rhs(t, y, ydot): unpack y into the particle set -> neighbour search -> each active effect
 //                    adds its contribution, phase by phase -> pack ydot
 // The state vector holds the moving particles only: [positions n*D | densities n |
-// velocities n*D]. Fixed particles (walls) live in the particle set and never enter it.
-#include <functional>
+// velocities n*D | evolving fields]. Fixed particles (walls) live in the particle set and never
+// enter it.
+//
+// The system does not own the state vector and knows nothing of the run: the run's OdeState
+// owns y, and IntegratedSystem (vesph/sim/integrated_system.hpp) is what an integrator sees in a
+// run. It calls afterStep (the hooks, then the effects' afterStep), then the run's StepObserver,
+// and between steps rearrangeParticles followed by the state's repacking (docs/architecture.md
+// "The life of one step"). A system with a fixed particle count can also be integrated by
+// itself (unit tests).
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include "vesph/boundary/boundary.hpp"
@@ -14,14 +22,15 @@
 #include "vesph/core/neighbours.hpp"
 #include "vesph/physics/effect.hpp"
 #include "vesph/physics/pair_driver.hpp"
-#include "vesph/sim/step_hook.hpp"
+#include "vesph/physics/step_hook.hpp"
 #include "vesph/time/integrator.hpp"
 
 namespace vesph {
 
 template <int D>
-class SphSystem final : public OdeSystem {
+class SphSystem final : public OdeSystem, public StateEvaluator {
  public:
+  // The parts a scene is built from (and that unit tests build by hand).
   ParticleSet<D> particles;
   Domain<D> domain;
   Kernel kernel;
@@ -29,11 +38,9 @@ class SphSystem final : public OdeSystem {
   PairDriver<D> driver;
   std::vector<std::unique_ptr<Effect<D>>> effects;
   std::vector<std::unique_ptr<Boundary<D>>> boundaries;
-  // Run after every accepted step, in order, before the effects' afterStep and the observer
-  // (the ISPH projection, src/isph).
+  // Run after every accepted step, in order, before the effects' afterStep (the ISPH
+  // projection, src/isph; inflow/outflow and domain exit, src/boundary).
   std::vector<std::unique_ptr<StepHook<D>>> hooks;
-  // Called by afterStep (diagnostics, checks, interruption); returns false to stop.
-  std::function<bool(double t, double dt, double* y)> observer;
 
   // Sets up boundaries and effects (field requests, prerequisites) and sorts the effects
   // into their phases. Call once the particles exist.
@@ -41,15 +48,36 @@ class SphSystem final : public OdeSystem {
 
   std::size_t size() const override;
   StateSegments segments() const override;
+  // The right-hand side as an integrator calls it (counted in rhsEvaluations).
   void rhs(double t, const double* y, double* ydot) override;
-  // The same evaluation without counting it (derived fields for output, tests).
-  void evaluate(double t, const double* y, double* ydot);
+  // The same evaluation without counting it (derived fields for output, tests, hooks).
+  void evaluate(double t, const double* y, double* ydot) override;
   StabilitySnapshot stability() const override;
+
+  // What the hooks see of the system (vesph/physics/step_hook.hpp). A system also converts to
+  // it, so that code handing the system itself to a hook (tests: proj.apply(sys, ...)) reads as
+  // before. Rebuilt on every call: it refers to this object's members.
+  StepContext<D>& stepContext();
+  operator StepContext<D>&() { return stepContext(); }
+  // Once before the integration: every hook's start at the initial state.
+  void startHooks(double t, double* y);
+  // After an accepted step: the hooks in order (they may change y), then the effects'
+  // afterStep. Always goes on (the run's checks are IntegratedSystem's).
   bool afterStep(double t, double dt, double* y) override;
+  // Whether afterStep may change the state (a hook that does: the ISPH projection).
   bool afterStepChangesState() const override;
+  // Whether the particle count may change during the run, and whether a hook asks for a change
+  // after the last step.
   bool mayResize() const override;
   bool resizePending() const override;
+  // The system does not own the state vector: a scene whose particle count changes is
+  // integrated through IntegratedSystem (the run's OdeState resizes); here a logic error.
   double* resizeState(double t, double* y) override;
+  // Between steps: y (the accepted, post-processed state) into the particle set, then every
+  // hook's changes made (particles removed, buffer particles released), through one
+  // ParticleRemap that the particle set, effects, boundaries, hooks and neighbour structures
+  // follow. The state must then be packed again at the new size().
+  void rearrangeParticles(const double* y);
   // Checkpoints of scenes whose particle set changes (`vesph run --resume`): the next id a
   // released particle gets, and the rebuild of the moving set as a checkpoint lists it. The
   // moving particles become those of `moving_ids`, in that order: a particle of the current
@@ -60,14 +88,9 @@ class SphSystem final : public OdeSystem {
   std::uint64_t nextId() const { return next_id_; }
   void setNextId(std::uint64_t id) { next_id_ = id; }
   void rebuildMovingSet(const std::vector<std::uint64_t>& moving_ids);
-  // The buffer the integrator works on (owned by the Simulation): resizeState resizes it.
-  std::vector<double>* state_buffer = nullptr;
-  // Called after every particle-count change with the rewritten state (the Simulation's copy
-  // of the last good state must follow it).
-  std::function<void(double t, const double* y)> resize_observer;
 
   void pack(double* y) const;
-  void unpack(const double* y);
+  void unpack(const double* y) override;
 
   const PressureModel* pressureModel() const { return pressure_model_; }
   const std::vector<Field*>& evolvingFields() const { return evolving_; }
@@ -91,6 +114,7 @@ class SphSystem final : public OdeSystem {
   ParticleChanges changes_;
   ParticleRemap remap_;
   std::vector<char> removed_flag_;
+  std::optional<StepContext<D>> context_;
   // Whether some hook answers true (hook is a StepHook member predicate).
   template <class Pred>
   bool anyHook(Pred pred) const {

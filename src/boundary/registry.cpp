@@ -1,0 +1,35 @@
+#include "vesph/boundary/registry.hpp"
+
+namespace vesph {
+
+// One line per boundary: name, build function (defined in the boundary's own file), summary.
+// The order is the build order: the inflow buffer appends fixed particles that the walls then
+// cover (as dummy layers), and its hook runs before the domain exit's.
+#define VESPH_BOUNDARIES(X)                                                                         \
+  X(inflow_outflow, buildInflowOutflow, "inflow buffer and outflow plane ([inflow], [outflow])")   \
+  X(dummy_walls, buildDummyWalls, "wall particles: dummy layers or boundary + image particles ([[blocks]] kind = \"wall\")") \
+  X(domain_exit, buildDomainExit, "removal of fluid particles that leave the domain (checks.leave_domain = \"remove\")")
+
+#define VESPH_DECLARE(NAME, FN, SUMMARY) \
+  template <int D>                       \
+  void FN(BoundaryBuild<D>&);
+VESPH_BOUNDARIES(VESPH_DECLARE)
+
+template <int D>
+const std::vector<BoundaryEntry<D>>& boundaryRegistry() {
+#define VESPH_ENTRY(NAME, FN, SUMMARY) BoundaryEntry<D>{#NAME, SUMMARY, &FN<D>},
+  static const std::vector<BoundaryEntry<D>> registry = {VESPH_BOUNDARIES(VESPH_ENTRY)};
+  return registry;
+}
+
+template <int D>
+void buildBoundaries(BoundaryBuild<D>& build) {
+  for (const BoundaryEntry<D>& entry : boundaryRegistry<D>()) entry.build(build);
+}
+
+template const std::vector<BoundaryEntry<2>>& boundaryRegistry<2>();
+template const std::vector<BoundaryEntry<3>>& boundaryRegistry<3>();
+template void buildBoundaries<2>(BoundaryBuild<2>&);
+template void buildBoundaries<3>(BoundaryBuild<3>&);
+
+}  // namespace vesph

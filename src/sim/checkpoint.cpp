@@ -1,0 +1,156 @@
+#include "vesph/sim/checkpoint.hpp"
+
+#include <utility>
+
+namespace vesph {
+
+template <int D>
+void Checkpoints<D>::join(std::string prefix, RestoreStage stage, Save save, Restore restore) {
+  carriers_.push_back(Carrier{std::move(prefix), stage, std::move(save), std::move(restore)});
+}
+
+template <int D>
+void Checkpoints<D>::joinScene() {
+  // Effects and hooks carry what their saveCarried writes (the lagged SOF acceleration, the
+  // ISPH pressure, the inflow's totals). Hooks' arrays are those of the last step taken: after
+  // a divergence (the checkpoint holds the last good state) the ISPH pressure is the failed
+  // step's, which the first resumed step's right-hand side sees before its projection replaces
+  // it.
+  for (auto& e : system_.effects) {
+    Effect<D>* effect = e.get();
+    join(std::string(effect->name()), RestoreStage::scene,
+         [effect](double, NamedArrays& out) { effect->saveCarried(out); },
+         [effect](const ArrayLookup& find) { effect->restoreCarried(find); });
+  }
+  if (system_.mayResize())  // the particle set itself is part of the restart point
+    join("", RestoreStage::particle_set, [this](double, NamedArrays& out) { saveParticleSet(out); },
+         [this](const ArrayLookup& find) { restoreParticleSet(find); });
+  for (auto& h : system_.hooks) {
+    StepHook<D>* hook = h.get();
+    join(std::string(hook->name()), RestoreStage::hooks_started,
+         [hook](double, NamedArrays& out) { hook->saveCarried(out); },
+         [hook](const ArrayLookup& find) { hook->restoreCarried(find); });
+  }
+}
+
+template <int D>
+void Checkpoints<D>::joinIntegrator(Integrator& integrator) {
+  // The integrator's carried rate belongs to the state it integrates: written only when the
+  // frame is at the integrator's time (after a divergence the frame holds the last good state,
+  // and nothing is carried then).
+  join("integrator", RestoreStage::integrator_started,
+       [&integrator](double t, NamedArrays& out) {
+         std::vector<double> carried = integrator.carried();
+         if (!carried.empty() && integrator.time() == t) out.emplace_back("carried", std::move(carried));
+       },
+       [&integrator](const ArrayLookup& find) {
+         if (const std::vector<double>* carried = find("carried")) integrator.restoreCarried(*carried);
+       });
+}
+
+template <int D>
+Checkpoint Checkpoints<D>::at(double t, Checkpoint totals) const {
+  Checkpoint c = std::move(totals);
+  c.state = state_.values();
+  c.id = system_.particles.id;
+  NamedArrays own;
+  for (const Carrier& carrier : carriers_) {
+    own.clear();
+    carrier.save(t, own);
+    for (auto& [aname, values] : own) c.arrays.emplace_back(arrayName(carrier, aname), std::move(values));
+  }
+  return c;
+}
+
+template <int D>
+void Checkpoints<D>::restore(const Checkpoint& checkpoint, RestoreStage stage) const {
+  for (const Carrier& carrier : carriers_)
+    if (carrier.stage == stage)
+      carrier.restore([&](const std::string& aname) { return checkpoint.find(arrayName(carrier, aname)); });
+}
+
+template <int D>
+void Checkpoints<D>::saveParticleSet(NamedArrays& out) const {
+  const ParticleSet<D>& p = system_.particles;
+  out.emplace_back("particles.n_moving", std::vector<double>{static_cast<double>(p.n_moving)});
+  out.emplace_back("particles.position", p.position);
+  out.emplace_back("particles.velocity", p.velocity);
+  out.emplace_back("particles.mass", p.mass);
+  out.emplace_back("system.next_id", std::vector<double>{static_cast<double>(system_.nextId())});
+}
+
+// The moving set of the checkpoint (released particles in, removed ones out), the fixed
+// particles' positions and velocities (the inflow buffer moves), the next id.
+template <int D>
+void Checkpoints<D>::restoreParticleSet(const ArrayLookup& find) {
+  const Checkpoint& ck = *resuming_;
+  const std::vector<double>* n_moving = find("particles.n_moving");
+  // Without it, a checkpoint of a segment whose particle set could not change (written
+  // before checks.leave_domain was switched to "remove"): the set must be the scene's own
+  // (checked with every checkpoint).
+  if (!n_moving) return;
+  const std::vector<double>* position = find("particles.position");
+  const std::vector<double>* velocity = find("particles.velocity");
+  const std::vector<double>* mass = find("particles.mass");
+  const std::vector<double>* next_id = find("system.next_id");
+  if (n_moving->size() != 1 || !position || !velocity || !mass || !next_id || next_id->size() != 1)
+    throw InputError("--resume: the checkpoint in " + where_ + " lacks part of the particle set of a scene whose particles change");
+  // The fixed particles never change; their ids are checked with the whole set.
+  const std::size_t nm = static_cast<std::size_t>((*n_moving)[0]);
+  if (nm > ck.id.size() || ck.id.size() - nm != system_.particles.nFixed()) throw anotherParticleSet();
+  system_.rebuildMovingSet(std::vector<std::uint64_t>(ck.id.begin(), ck.id.begin() + static_cast<std::ptrdiff_t>(nm)));
+  ParticleSet<D>& p = system_.particles;
+  if (position->size() != p.position.size() || velocity->size() != p.velocity.size() || mass->size() != p.mass.size())
+    throw anotherParticleSet();
+  p.position = *position;
+  p.velocity = *velocity;
+  p.mass = *mass;
+  system_.setNextId(static_cast<std::uint64_t>((*next_id)[0]));
+  state_.values().assign(system_.size(), 0.0);
+}
+
+template <int D>
+InputError Checkpoints<D>::anotherParticleSet() const {
+  const Checkpoint& ck = *resuming_;
+  return InputError("--resume: the checkpoint in " + where_ + " belongs to another particle set (" +
+                    std::to_string(ck.id.size()) + " particles, state of " + std::to_string(ck.state.size()) +
+                    " values; the scene builds " + std::to_string(system_.particles.size()) + " and " +
+                    std::to_string(state_.size()) + ")");
+}
+
+template <int D>
+Checkpoint Checkpoints<D>::resume(const std::string& dir, const ResumeRules& rules) {
+  ResumeSource src = readResumeSource(dir, rules.scene_name);
+  where_ = dir + "/" + rules.scene_name + ".h5";
+  const std::string diff =
+      firstSceneDifference(src.scene_toml, rules.resolved_scene, {"time", "output", "checks", "integrator"});
+  if (!diff.empty())
+    throw InputError("--resume: the scene differs from the one " + where_ + " was written with at '" + diff +
+                     "'; only [time], [output], [checks] and [integrator] may change between the segments of a run");
+  Checkpoint& ck = src.checkpoint;
+  // The particle set's restore reads the checkpoint's ids and names the file (messages), while
+  // this function runs.
+  resuming_ = &ck;
+  struct ClearOnExit {
+    const Checkpoint*& slot;
+    ~ClearOnExit() { slot = nullptr; }
+  } clear_on_exit{resuming_};
+  if (!(ck.time < rules.end_time * (1 + 1e-12)))
+    throw InputError("--resume: the checkpoint is at t = " + std::to_string(ck.time) + " s, beyond time.end = " +
+                     std::to_string(rules.end_time) + " s; raise time.end to go on");
+  restore(ck, RestoreStage::particle_set);
+  if (ck.find("domain_exit.escaped") && !rules.removes_leaving)
+    throw InputError("--resume: the run in " + where_ + " removes particles that leave the domain; "
+                     "checks.leave_domain cannot go back to \"stop\" (its diagnostics column would end)");
+  if (ck.id != system_.particles.id || ck.state.size() != state_.size()) throw anotherParticleSet();
+  // Between-step arrays of effects (the lagged SOF acceleration) go back where they were.
+  restore(ck, RestoreStage::scene);
+  state_.values() = std::move(ck.state);
+  system_.unpack(state_.data());
+  return std::move(src.checkpoint);
+}
+
+template class Checkpoints<2>;
+template class Checkpoints<3>;
+
+}  // namespace vesph

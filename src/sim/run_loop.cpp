@@ -1,0 +1,254 @@
+// The run loop (docs/architecture.md "The life of one step"): from the initial state (or a
+// checkpoint, --resume) to the end time, a frame and a checkpoint at every output time, the
+// diagnostics and checks after every accepted step (RunLoop is the StepObserver the integrator's
+// system hands every accepted step to), and the ending: the failure handling (the last good state
+// as the last frame), interruption, and summary.json.
+#include <omp.h>
+
+#include <algorithm>
+#include <chrono>
+#include <filesystem>
+
+#include "vesph/io/progress.hpp"
+#include "vesph/sim/integrated_system.hpp"
+#include "vesph/sim/simulation.hpp"
+
+namespace vesph {
+
+template <int D>
+class RunLoop final : public StepObserver {
+ public:
+  RunLoop(Simulation<D>& sim, const RunOptions& opt)
+      : sim_(sim), opt_(opt), t_start_(Clock::now()),
+        // --resume: the checkpoint of the earlier segment replaces the initial state.
+        resumed_(opt.resume ? sim.checkpoints_.resume(opt.output_dir, resumeRules()) : Checkpoint{}),
+        t0_(resumed_.time), writer_(openWriter()), scratch_(sim.state_.size()),
+        steps_(static_cast<std::uint64_t>(resumed_.step)), max_dev_seen_(resumed_.max_density_deviation),
+        progress_(t0_, sim.t_end_, opt.quiet), ode_(sim.system_, sim.state_, *this) {}
+
+  RunReport run();
+  bool accepted(double t, double dt, const double* y) override;
+
+ private:
+  using Clock = std::chrono::steady_clock;
+  ResumeRules resumeRules() const;
+  std::unique_ptr<OutputWriter<D>> openWriter() const;
+  Checkpoint totals(double t) const;
+  void writeFrame(double t);
+  void integrate(RunStatus& status, std::string& message);
+  void startIntegration();
+  void writeLastGood(std::string& message);
+  nlohmann::json summary(const RunReport& report);
+
+  Simulation<D>& sim_;
+  const RunOptions& opt_;
+  const Clock::time_point t_start_;
+  const Checkpoint resumed_;
+  const double t0_;
+  std::unique_ptr<OutputWriter<D>> writer_;
+  std::vector<DiagnosticsRow> pending_;  // rows of the steps since the last frame
+  std::vector<double> scratch_;
+  std::uint64_t steps_;  // accepted and checked, the earlier segments' included
+  double max_dev_seen_;
+  std::string failure_;
+  Progress progress_;
+  double last_frame_time_ = -1;
+  IntegratedSystem<D> ode_;
+};
+
+template <int D>
+ResumeRules RunLoop<D>::resumeRules() const {
+  return {sim_.header_.name, sim_.resolved_scene_, sim_.t_end_, sim_.checks_.removes_leaving};
+}
+
+template <int D>
+std::unique_ptr<OutputWriter<D>> RunLoop<D>::openWriter() const {
+  if (opt_.output_dir.empty()) return nullptr;
+  const SphSystem<D>& sys = sim_.system_;
+  const FileAttributes attrs{D, sim_.resolved_scene_, sim_.dx_, sys.kernel.h, std::string(kernelName(sys.kernel.type)),
+                             StepChecks<D>::hookColumns(sys)};
+  return opt_.resume ? std::make_unique<OutputWriter<D>>(opt_.output_dir, sim_.header_.name, attrs, t0_)
+                     : std::make_unique<OutputWriter<D>>(opt_.output_dir, sim_.header_.name, attrs);
+}
+
+// The run's totals include the earlier segments of a resumed run.
+template <int D>
+Checkpoint RunLoop<D>::totals(double t) const {
+  const IntegratorStats st = sim_.integrator_->stats();
+  Checkpoint c;
+  c.time = t;
+  c.step = static_cast<std::int64_t>(steps_);
+  c.rhs_evals = resumed_.rhs_evals + st.rhs_evals;
+  c.rejected_steps = resumed_.rejected_steps + st.rejected_steps;
+  c.neighbour_builds = resumed_.neighbour_builds + sim_.system_.neighbours.builds();
+  c.wall_seconds = resumed_.wall_seconds + std::chrono::duration<double>(Clock::now() - t_start_).count();
+  c.max_density_deviation = max_dev_seen_;
+  c.resumes = resumed_.resumes + (opt_.resume ? 1 : 0);
+  return c;
+}
+
+// A frame of the current state at time t, and its restart point. Derived fields (pressure,
+// wall values) come from an evaluation at the state.
+template <int D>
+void RunLoop<D>::writeFrame(double t) {
+  if (!writer_ || t == last_frame_time_) return;  // that state is written already
+  last_frame_time_ = t;
+  const std::vector<double>& y = sim_.state_.values();
+  scratch_.resize(y.size());  // the particle count may have changed (inflow, outflow)
+  sim_.system_.unpack(y.data());
+  sim_.system_.evaluate(t, y.data(), scratch_.data());
+  writer_->writeFrame(t, static_cast<std::int64_t>(steps_), sim_.system_.particles, pending_);
+  pending_.clear();
+  writer_->writeCheckpoint(sim_.checkpoints_.at(t, totals(t)));
+}
+
+template <int D>
+bool RunLoop<D>::accepted(double t, double dt, const double* y) {
+  const DiagnosticsRow row = sim_.checks_.diagnostics(sim_.system_, t, dt, y);
+  failure_ = sim_.checks_.failure(sim_.system_, row, y);
+  if (!failure_.empty()) return false;
+  ++steps_;
+  max_dev_seen_ = std::max(max_dev_seen_, row.max_density_deviation);
+  pending_.push_back(row);
+  sim_.state_.keepGood(t, y);
+  if (opt_.progress) progress_.update(t, steps_, dt);
+  if (interruptRequested()) return false;
+  if (opt_.max_steps && steps_ >= opt_.max_steps) return false;
+  return true;
+}
+
+// The hooks' start and the integrator's, each followed on --resume by what the checkpoint
+// carries for it (it replaces what their start computed from the state alone: the ISPH pressure
+// the incremental form starts from, the hooks' totals, the integrator's rate; a hook's arrays
+// are absent from a checkpoint written before the hook was switched on).
+template <int D>
+void RunLoop<D>::startIntegration() {
+  sim_.system_.startHooks(t0_, sim_.state_.data());
+  if (opt_.resume) sim_.checkpoints_.restore(resumed_, RestoreStage::hooks_started);
+  sim_.integrator_->start(ode_, t0_, sim_.state_.data());
+  if (opt_.resume) {
+    last_frame_time_ = t0_;  // the checkpoint's frame is in the file already
+    sim_.checkpoints_.restore(resumed_, RestoreStage::integrator_started);
+  } else {
+    writeFrame(0.0);
+  }
+}
+
+template <int D>
+void RunLoop<D>::integrate(RunStatus& status, std::string& message) {
+  startIntegration();
+  Integrator& integrator = *sim_.integrator_;
+  for (double tout : sim_.output_times_) {
+    if (tout <= t0_ * (1 + 1e-12)) continue;  // written by the earlier segment
+    if (!integrator.advance(tout)) break;
+    writeFrame(tout);
+  }
+  if (!failure_.empty()) {
+    status = RunStatus::diverged;
+    message = failure_;
+  } else if (interruptRequested()) {
+    status = RunStatus::interrupted;
+    message = "interrupted at t = " + std::to_string(integrator.time()) + " s; the current state is the last frame";
+    writeFrame(integrator.time());
+  } else if (opt_.max_steps && steps_ >= opt_.max_steps) {
+    message = "stopped after " + std::to_string(steps_) + " steps as requested";
+  }
+}
+
+template <int D>
+void RunLoop<D>::writeLastGood(std::string& message) {
+  OdeState& state = sim_.state_;
+  message += "; the last good state (t = " + std::to_string(state.goodTime()) + " s) is written as the last frame";
+  state.restoreGood();
+  try {
+    writeFrame(state.goodTime());
+  } catch (const NumericalFailure&) {
+  }
+}
+
+template <int D>
+RunReport RunLoop<D>::run() {
+  sim_.state_.keepCurrentAsGood(t0_);
+  RunStatus status = RunStatus::ok;
+  std::string message;
+  try {
+    integrate(status, message);
+  } catch (const NumericalFailure& e) {
+    status = RunStatus::diverged;
+    message = e.what();
+  } catch (const InputError&) {
+    throw;  // a setting that only shows at run time: exit 2, no summary of a run that never ran
+  } catch (const std::exception& e) {
+    // I/O and other errors: report them in summary.json too; what was written stays readable.
+    status = RunStatus::error;
+    message = e.what();
+  }
+  if (status == RunStatus::diverged) writeLastGood(message);
+  Integrator& integrator = *sim_.integrator_;
+  if (opt_.progress) {
+    progress_.update(integrator.time(), steps_, integrator.lastStep(), true);
+    progress_.finish();
+  }
+  RunReport report;
+  report.status = status;
+  report.message = message.empty() ? "finished" : message;
+  report.final_time = status == RunStatus::diverged ? sim_.state_.goodTime() : integrator.time();
+  report.wall_seconds = std::chrono::duration<double>(Clock::now() - t_start_).count();
+  report.summary = summary(report);
+  if (!opt_.output_dir.empty()) {
+    try {
+      writeSummary(opt_.output_dir, report.summary);
+    } catch (const std::exception&) {
+      if (status == RunStatus::ok) throw;  // a failed run's own error is the one to report
+    }
+  }
+  return report;
+}
+
+// summary.json (docs/user-guide.md); closes the output file.
+template <int D>
+nlohmann::json RunLoop<D>::summary(const RunReport& report) {
+  const Checkpoint total = totals(report.final_time);
+  const SphSystem<D>& sys = sim_.system_;
+  nlohmann::json s;
+  s["status"] = statusName(report.status);
+  s["message"] = report.message;
+  s["scene"] = sim_.header_.name;
+  s["final_time"] = report.final_time;
+  s["end_time"] = sim_.t_end_;
+  s["steps"] = steps_;  // accepted steps (a step that failed the checks is not counted)
+  s["rejected_steps"] = total.rejected_steps;
+  s["rhs_evals"] = total.rhs_evals;
+  s["neighbour_builds"] = total.neighbour_builds;
+  s["wall_seconds"] = total.wall_seconds;
+  if (opt_.resume)
+    s["resumed"] = {{"from_time", t0_}, {"count", total.resumes}, {"segment_wall_seconds", report.wall_seconds}};
+  s["particles"] = sys.particles.size();
+  s["fluid_particles"] = sys.particles.n_moving;
+  s["integrator"] = sim_.integrator_name_;
+  s["threads"] = omp_get_max_threads();
+  s["max_density_deviation"] = max_dev_seen_;
+  s["scheme"] = std::string(sim_.scheme_->name());
+  for (const auto& hk : sys.hooks) hk->summarize(s);
+  if (const PressureModel* m = sys.pressureModel()) {
+    s["sound_speed"] = m->soundSpeed();
+    if (m->designDensityVariation() > 0) s["design_density_variation"] = m->designDensityVariation();
+  }
+  if (writer_) {
+    s["frames"] = writer_->frames();
+    s["h5"] = std::filesystem::path(writer_->h5Path()).filename().string();
+    s["xdmf"] = std::filesystem::path(writer_->xdmfPath()).filename().string();
+    writer_.reset();
+  }
+  return s;
+}
+
+template <int D>
+RunReport Simulation<D>::run(const RunOptions& options) {
+  return RunLoop<D>(*this, options).run();
+}
+
+template RunReport Simulation<2>::run(const RunOptions&);
+template RunReport Simulation<3>::run(const RunOptions&);
+
+}  // namespace vesph
