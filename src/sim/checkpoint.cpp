@@ -1,5 +1,7 @@
 #include "vesph/sim/checkpoint.hpp"
 
+#include "vesph/io/config.hpp"
+
 #include <utility>
 
 namespace vesph {
