@@ -181,7 +181,7 @@ Simulation<D>::Simulation(Config& config, const SceneHeader& header) : config_(c
   }
   for (const auto& e : system_.effects) scales.stress = std::max(scales.stress, e->stressScale(scales.velocity, length));
   ConfigTable integ = root.table("integrator");
-  integrator_ = makeIntegrator(integ, scales, scheme_ == "isph" ? 0.175 : 0.125);
+  integrator_ = makeIntegrator(integ, scales, scheme_ == "isph" ? kIsphDefaultCfl : kWcsphDefaultCfl);
   integrator_name_ = integrator_->name();
 
   ConfigTable checks = root.table("checks");

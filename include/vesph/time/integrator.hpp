@@ -42,8 +42,13 @@ struct StabilitySnapshot {
 // fixed_step (integrator.step), when set, makes the fixed-step integrators take exactly that
 // step (shortened only to land on output times) instead of the stability limit: for temporal
 // convergence studies; the limits are not applied then.
+// The default CFL coefficient of each pressure scheme (thesis §3.5): WCSPH's is StepControl's
+// cfl; the incompressible scheme's projection allows a larger step.
+inline constexpr double kWcsphDefaultCfl = 0.125;
+inline constexpr double kIsphDefaultCfl = 0.175;
+
 struct StepControl {
-  double cfl = 0.125;
+  double cfl = kWcsphDefaultCfl;
   double viscous_coefficient = 0.125;
   double force_coefficient = 0.25;
   double relaxation_coefficient = 0.5;
@@ -131,7 +136,8 @@ const std::vector<IntegratorEntry>& integratorRegistry();
 
 // Reads [integrator] (type and the step-control keys) and builds the integrator. default_cfl:
 // the CFL coefficient when the scene gives none (WCSPH 0.125; ISPH 0.175, thesis §3.5).
-std::unique_ptr<Integrator> makeIntegrator(ConfigTable& cfg, const ReferenceScales& scales, double default_cfl = 0.125);
+std::unique_ptr<Integrator> makeIntegrator(ConfigTable& cfg, const ReferenceScales& scales,
+                                           double default_cfl = kWcsphDefaultCfl);
 
 // The explicit Butcher tables of SUNDIALS 6.4.1 (integrator.table), by name without the
 // ARKODE_ prefix, with their order q and embedding order p (0: no embedding).
