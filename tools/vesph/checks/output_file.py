@@ -65,8 +65,10 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-DEFAULT_DTD = os.path.join(HERE, "xdmf3.dtd")
+from vesph import TOOLS
+from vesph.output import as_str
+
+DEFAULT_DTD = os.path.join(TOOLS, "xdmf3.dtd")
 
 MANDATORY = ["id", "kind", "position", "velocity", "density", "mass", "pressure"]
 OPTIONAL = ["extra_stress", "extra_stress_zz", "free_surface"]
@@ -104,16 +106,11 @@ class Report:
         self.warnings[key][1] += 1
 
 
-def as_str(v):
-    if isinstance(v, (bytes, np.bytes_)):
-        return bytes(v).decode("utf-8")
-    if isinstance(v, np.ndarray) and v.shape == ():
-        return as_str(v[()])
-    return v
-
-
 def is_str(v):
-    return isinstance(as_str(v), str)
+    """Whether an HDF5 attribute is a string (bytes, numpy bytes or str, or a scalar array of one)."""
+    if isinstance(v, np.ndarray) and v.shape == ():
+        v = v[()]
+    return isinstance(v, (str, bytes, np.bytes_))
 
 
 def is_int(v):
@@ -144,7 +141,7 @@ def check_h5(path, rep):
     with f:
         a = f.attrs
         # --- root attributes
-        fmt = as_str(a.get("format")) if "format" in a else None
+        fmt = (as_str(a["format"]) if is_str(a["format"]) else a["format"]) if "format" in a else None
         if fmt is None:
             rep.problem("root attribute 'format' is missing")
         elif fmt != "vesph-1":

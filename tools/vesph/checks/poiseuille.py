@@ -64,79 +64,14 @@ The analytic solution is importable:
 
 import argparse
 import csv
-import math
 import sys
-import tomllib
 
 import numpy as np
 
+from vesph.analytic import analytic_velocity  # noqa: F401 (the tool's reference, also imported from here)
+from vesph.output import Output, ToolError
+
 MASS_DRIFT_LIMIT = 1e-12
-SERIES_RTOL = 1e-16
-
-
-def analytic_velocity(y, t, F, nu, H, y0=0.0):
-    """Transient plane Poiseuille velocity [m/s].
-
-    y   : position(s) across the channel [m] (scalar or array); the walls
-          are at y0 and y0 + H.
-    t   : time since the fluid started from rest [s] (scalar, >= 0).
-    F   : body-force acceleration along the channel [m/s^2].
-    nu  : kinematic viscosity [m^2/s].
-    H   : channel height [m].
-    y0  : position of the lower wall [m] (default 0).
-
-    The Fourier series is summed until the magnitude bound of the next term,
-    4 F H^2 / (nu pi^3 (2n+1)^3) exp(-(2n+1)^2 pi^2 nu t / H^2), falls below
-    1e-16 times the steady centreline velocity F H^2 / (8 nu).  At t == 0
-    the exact initial state (zero velocity) is returned.  Returns a float
-    for scalar y, else an ndarray shaped like y.
-    """
-    if t < 0:
-        raise ValueError("analytic_velocity: t must be >= 0")
-    if nu <= 0 or H <= 0:
-        raise ValueError("analytic_velocity: nu and H must be > 0")
-    s = np.asarray(y, dtype=np.float64) - y0
-    scalar = s.ndim == 0
-    s = np.atleast_1d(s)
-    if t == 0.0:
-        out = np.zeros_like(s)
-        return float(out[0]) if scalar else out
-    steady = F / (2.0 * nu) * s * (H - s)
-    u_centre = abs(F) * H * H / (8.0 * nu)
-    amp0 = 4.0 * F * H * H / (nu * math.pi ** 3)
-    decay = math.pi ** 2 * nu * t / (H * H)
-    threshold = SERIES_RTOL * u_centre
-    total = np.zeros_like(s)
-    n0 = 0
-    chunk = 64
-    while True:
-        m = 2.0 * np.arange(n0, n0 + chunk) + 1.0          # (2n+1)
-        coef = amp0 / m ** 3 * np.exp(-(m ** 2) * decay)  # term amplitudes
-        keep = np.abs(coef) >= threshold
-        if u_centre == 0.0:
-            keep[:] = False
-        # amplitudes decrease monotonically in n: the first dropped term
-        # ends the sum.
-        nkeep = int(np.argmin(keep)) if not keep.all() else chunk
-        if nkeep > 0:
-            total += np.sin(np.outer(m[:nkeep], s) * (math.pi / H)).T @ coef[:nkeep]
-        if nkeep < chunk:
-            break
-        n0 += chunk
-        if n0 > 10_000_000:   # only reachable for absurdly small t
-            break
-    out = steady - total
-    return float(out[0]) if scalar else out
-
-
-def _as_str(value):
-    if isinstance(value, bytes):
-        return value.decode("utf-8")
-    if isinstance(value, np.ndarray) and value.shape == ():
-        return _as_str(value[()])
-    if isinstance(value, np.bytes_):
-        return bytes(value).decode("utf-8")
-    return str(value)
 
 
 def scene_parameters(scene):
@@ -180,20 +115,6 @@ def scene_parameters(scene):
     return rho, mu, F, y0, H
 
 
-def read_frames(h5):
-    """Return a list of (name, time, step, group) sorted by frame name."""
-    if "frames" not in h5:
-        raise ValueError("file has no /frames group")
-    frames = []
-    for name in sorted(h5["frames"].keys()):
-        g = h5["frames"][name]
-        frames.append((name, float(g.attrs["time"]),
-                       int(g.attrs["step"]) if "step" in g.attrs else -1, g))
-    if not frames:
-        raise ValueError("file has no frames")
-    return frames
-
-
 def select_frames(frames, times, time_rtol):
     """Frames to check: closest frame per requested time (within time_rtol),
     or all frames with time > 0.  Returns (selected, problems)."""
@@ -213,9 +134,9 @@ def select_frames(frames, times, time_rtol):
     return selected, problems
 
 
-def fluid_mass(group):
-    kind = group["kind"][...]
-    return float(np.sum(group["mass"][...][kind == 0], dtype=np.float64))
+def fluid_mass(fr):
+    """The total mass of the fluid particles of a frame (dict with kind and mass), kg."""
+    return float(np.sum(fr["mass"][fr["kind"] == 0], dtype=np.float64))
 
 
 COLUMNS = ["frame", "time_s", "step", "n_fluid", "error_percent",
@@ -225,23 +146,20 @@ COLUMNS = ["frame", "time_s", "step", "n_fluid", "error_percent",
 def check(path, times=None, tolerance=0.02, time_rtol=1e-6, png=None, csv_path=None,
           out=sys.stdout, err=sys.stderr):
     """Run the check; returns the exit status (0 pass, 1 fail)."""
-    import h5py
-
     try:
-        h5 = h5py.File(path, "r")
-    except OSError as e:
-        print(f"FAIL: cannot open {path}: {e}", file=err)
+        h5 = Output(path)
+    except ToolError as e:
+        print(f"FAIL: {e}", file=err)
         return 1
     with h5:
+        scene = h5.scene
         try:
-            if "scene" not in h5.attrs:
-                raise ValueError("root attribute 'scene' is missing")
-            scene = tomllib.loads(_as_str(h5.attrs["scene"]))
             rho0, mu, F, y0, H = scene_parameters(scene)
-            frames = read_frames(h5)
-        except (ValueError, tomllib.TOMLDecodeError, KeyError) as e:
+        except ValueError as e:
             print(f"FAIL: {path}: {e}", file=err)
             return 1
+        # (name, time, step, index) of each frame, in time order
+        frames = [(name, t, step, k) for k, ((name, t), step) in enumerate(zip(h5.frames, h5.steps))]
         nu = mu / rho0
         u_centre = F * H * H / (8.0 * nu)
         if u_centre == 0.0:
@@ -256,7 +174,7 @@ def check(path, times=None, tolerance=0.02, time_rtol=1e-6, png=None, csv_path=N
         ss = scene.get("effects", {}).get("equation_of_state", {}).get("sound_speed")
         delta = float(ss["delta"]) if isinstance(ss, dict) and "delta" in ss else None
 
-        m_ref = fluid_mass(frames[0][3])
+        m_ref = fluid_mass(h5.read(0, ("kind", "mass")))
         print(f"file: {path}", file=out)
         print(f"scene: {scene.get('name', '?')}   rho0 = {rho0:.6g} kg/m^3   "
               f"mu = {mu:.6g} Pa s   nu = {nu:.6g} m^2/s", file=out)
@@ -270,16 +188,16 @@ def check(path, times=None, tolerance=0.02, time_rtol=1e-6, png=None, csv_path=N
               file=out)
 
         rows, curves = [], []
-        for name, t, step, g in selected:
-            kind = g["kind"][...]
-            fl = kind == 0
+        for name, t, step, k in selected:
+            g = h5.read(k, ("kind", "position", "velocity", "density", "mass"))
+            fl = g["kind"] == 0
             nfl = int(np.count_nonzero(fl))
             if nfl == 0:
                 problems.append(f"frame {name} (t = {t:.6g} s): no fluid particles")
                 continue
-            pos = g["position"][...][fl]
-            vx = g["velocity"][...][fl, 0]
-            rho = g["density"][...][fl]
+            pos = g["position"][fl]
+            vx = g["velocity"][fl, 0]
+            rho = g["density"][fl]
             y = pos[:, 1]
             v_exact = analytic_velocity(y, t, F, nu, H, y0)
             error = float(np.max(np.abs(vx - v_exact))) / abs(u_centre)

@@ -41,41 +41,12 @@ The steady checks above still apply to H5FILE.
 Exit 0 when every check passes, 1 otherwise.
 """
 import argparse
-import math
 import sys
-import tomllib
 
-import h5py
 import numpy as np
 
-NORMAL = {"contravariant": (-2.0, 0.0), "covariant": (0.0, 2.0), "mixed": (0.0, 0.0), "jaumann": (-1.0, 1.0)}
-
-
-def coefficients(form, alpha1, alpha2):
-    if form == "cef":
-        return 0.5 * alpha1, -(0.5 * alpha1 + alpha2)
-    return alpha1, alpha2
-
-
-def steady_stresses(form, derivative, alpha1, alpha2, mu, g):
-    """(T_xx, T_xy, T_yy) of steady simple shear at shear rate g (arrays)."""
-    c1, c2 = coefficients(form, alpha1, alpha2)
-    x, y = NORMAL[derivative]
-    return (c2 + x * c1) * g * g, mu * g, (c2 + y * c1) * g * g
-
-
-def startup_velocity(yy, t, F, nu, H, retardation, nmax=2001):
-    """v at distances yy from the lower wall, time t; retardation = c1/rho (m^2)."""
-    v = np.zeros_like(np.asarray(yy, dtype=float))
-    for n in range(1, nmax + 1, 2):
-        k = n * math.pi / H
-        amp = 4 * F * H * H / (nu * n ** 3 * math.pi ** 3)
-        rate = nu * k * k / (1 + retardation * k * k)
-        v = v + amp * np.sin(k * yy) * (1 - math.exp(-rate * t))
-        if amp < 1e-14 * F * H * H / nu:
-            break
-    return v
-
+from vesph.analytic import coefficients, startup_velocity, steady_stresses
+from vesph.output import Output, run_reporting_errors
 
 def parameters(scene):
     eff = scene["effects"]
@@ -103,9 +74,20 @@ def main(argv=None):
     ap.add_argument("--png")
     ap.add_argument("--csv")
     a = ap.parse_args(argv)
-    with h5py.File(a.h5file, "r") as f:
-        sc = f.attrs["scene"]
-        scene = tomllib.loads(sc.decode() if isinstance(sc, bytes) else str(sc))
+    return run_reporting_errors("second_order_channel_check", check, a)
+
+
+def centreline_velocity(fr, yc, H):
+    """(y, v_x, the mask of the two rows next to the centreline) of the fluid of a frame."""
+    fl = fr["kind"] == 0
+    y = fr["position"][fl, 1]
+    dist = np.abs(y - yc)
+    return y, fr["velocity"][fl, 0], dist <= dist.min() * (1 + 1e-6) + 1e-12 * H
+
+
+def check(a):
+    with Output(a.h5file) as out:
+        scene = out.scene
         P = parameters(scene)
         rho, mu, F = P["rho"], P["mu"], P["F"]
         nu = mu / rho
@@ -117,17 +99,10 @@ def main(argv=None):
         print(f"{P['form']} / {P['derivative']}: alpha1 = {P['alpha1']:g}, alpha2 = {P['alpha2']:g} Pa s^2, "
               f"v_max = {vmax:.4g} m/s, wall shear rate {gmax:.4g} 1/s, DA/Dt "
               f"{'lagged' if P['lagged'] else 'quasi-steady'}")
-        frames = sorted(f["frames"].keys())
         ok = True
         history = []
-        for name in frames:
-            g = f["frames"][name]
-            t = float(g.attrs["time"])
-            fl = g["kind"][...] == 0
-            y = g["position"][...][fl, 1]
-            vx = g["velocity"][...][fl, 0]
-            dist = np.abs(y - yc)
-            central = dist <= dist.min() * (1 + 1e-6) + 1e-12 * H
+        for k, (name, t) in enumerate(out.frames):
+            y, vx, central = centreline_velocity(out.read(k, ("kind", "position", "velocity")), yc, H)
             ref = startup_velocity(y[central] - P["y0"], t, F, nu, H, c1 / rho if P["lagged"] else 0.0).mean()
             newt = startup_velocity(y[central] - P["y0"], t, F, nu, H, 0.0).mean()
             history.append((t, float(vx[central].mean()), float(ref), float(newt)))
@@ -144,22 +119,17 @@ def main(argv=None):
             if not P["lagged"]:
                 print("FAIL: --retardation needs H5FILE run with material_derivative = \"lagged\"")
                 return 1
-            with h5py.File(a.retardation, "r") as q:
-                qframes = sorted(q["frames"].keys())
-                if len(qframes) != len(frames):
+            with Output(a.retardation) as q:
+                if len(q.frames) != len(out.frames):
                     print("FAIL: the two runs have different frames")
                     return 1
                 worst, peak = 0.0, 0.0
-                for (t, vl, ref, newt), name in zip(history, qframes):
-                    g = q["frames"][name]
-                    if abs(float(g.attrs["time"]) - t) > 1e-9 * max(t, 1e-30):
+                for k, (t, vl, ref, newt) in enumerate(history):
+                    if abs(q.frames[k][1] - t) > 1e-9 * max(t, 1e-30):
                         print("FAIL: the two runs have different frame times")
                         return 1
-                    fl = g["kind"][...] == 0
-                    y = g["position"][...][fl, 1]
-                    dist = np.abs(y - yc)
-                    central = dist <= dist.min() * (1 + 1e-6) + 1e-12 * H
-                    dsim = vl - float(g["velocity"][...][fl, 0][central].mean())
+                    _, vq, central = centreline_velocity(q.read(k, ("kind", "position", "velocity")), yc, H)
+                    dsim = vl - float(vq[central].mean())
                     worst = max(worst, abs(dsim - (ref - newt)))
                     peak = max(peak, abs(ref - newt))
                 print(f"retardation by DA/Dt: peak (analytic) {100*peak/vmax:.3f} % of v_max, largest deviation of "
@@ -168,15 +138,16 @@ def main(argv=None):
                 if not worst / vmax < a.retardation_tolerance:
                     print(f"FAIL: retardation deviation {100*worst/vmax:.3f} % >= {100*a.retardation_tolerance:g} %")
                     ok = False
-        g = f["frames"][frames[-1]]
-        t = float(g.attrs["time"])
-        fl = g["kind"][...] == 0
-        y = g["position"][...][fl, 1]
-        vx = g["velocity"][...][fl, 0]
-        if "extra_stress" not in g:
+        last = len(out.frames) - 1
+        t = out.frames[last][1]
+        if not out.has(last, "extra_stress"):
             print("FAIL: the frames have no extra_stress")
             return 1
-        T = g["extra_stress"][...][fl]
+        g = out.read(last, ("kind", "position", "velocity", "extra_stress"))
+        fl = g["kind"] == 0
+        y = g["position"][fl, 1]
+        vx = g["velocity"][fl, 0]
+        T = g["extra_stress"][fl]
         interior = np.abs(y - yc) <= 0.5 * H - a.interior * H
         shear = -F * (y - yc) / nu
         v_exact = F / (2 * nu) * (y - P["y0"]) * (P["y1"] - y)
@@ -195,10 +166,10 @@ def main(argv=None):
                   f"error {100*err:.3f} % of {scale:.4g}{flag}")
             ok = ok and err < a.tolerance
         if a.csv:
-            with open(a.csv, "w") as out:
-                out.write("y_m,vx_m_s,vx_exact,Txx_Pa,Txx_exact,Txy_Pa,Txy_exact,Tyy_Pa,Tyy_exact\n")
+            with open(a.csv, "w") as csv_file:
+                csv_file.write("y_m,vx_m_s,vx_exact,Txx_Pa,Txx_exact,Txy_Pa,Txy_exact,Tyy_Pa,Tyy_exact\n")
                 for k in np.argsort(y):
-                    out.write(",".join(f"{v:.10g}" for v in (y[k], vx[k], v_exact[k], T[k, 0], txx[k], T[k, 1],
+                    csv_file.write(",".join(f"{v:.10g}" for v in (y[k], vx[k], v_exact[k], T[k, 0], txx[k], T[k, 1],
                                                              txy[k], T[k, 2], tyy[k])) + "\n")
         if a.png:
             import matplotlib

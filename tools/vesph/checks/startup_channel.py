@@ -32,41 +32,12 @@ Checks (exit 0 when all pass, 1 otherwise):
 Also printed: the largest profile error over all fluid particles at each frame.
 """
 import argparse
-import math
 import sys
-import tomllib
 
-import h5py
 import numpy as np
 
-
-def mode_amplitude(T, E, beta, N):
-    alpha = E * N * N / 4.0
-    b = 0.5 * (1.0 + beta * alpha)
-    d = b * b - alpha
-    if d > 0:
-        c = math.sqrt(d)
-        g = (b - alpha) / c
-        # overflow-safe form of e^{-bT}[cosh cT + g sinh cT]
-        return 0.5 * (1 + g) * np.exp((c - b) * T) + 0.5 * (1 - g) * np.exp(-(b + c) * T)
-    if d < 0:
-        c = math.sqrt(-d)
-        return np.exp(-b * T) * (np.cos(c * T) + (b - alpha) / c * np.sin(c * T))
-    return np.exp(-b * T) * (1 + (b - alpha) * T)
-
-
-def waters_king(Y, T, E, beta, kmax=400):
-    """U/Ubar at positions Y (array) and dimensionless time T."""
-    Y = np.asarray(Y, dtype=float)
-    u = 1.5 * (1.0 - Y * Y)
-    for k in range(1, kmax + 1):
-        N = (2 * k - 1) * math.pi
-        A = mode_amplitude(T, E, beta, N)
-        term = 48.0 * (-1) ** k / N ** 3 * np.cos(N * Y / 2.0) * A
-        u = u + term
-        if abs(48.0 / N ** 3 * A) < 1e-14:
-            break
-    return u
+from vesph.analytic import waters_king
+from vesph.output import Output, run_reporting_errors
 
 
 def parameters(scene):
@@ -94,9 +65,12 @@ def main(argv=None):
     ap.add_argument("--png")
     ap.add_argument("--csv")
     a = ap.parse_args(argv)
-    with h5py.File(a.h5file, "r") as f:
-        sc = f.attrs["scene"]
-        scene = tomllib.loads(sc.decode() if isinstance(sc, bytes) else str(sc))
+    return run_reporting_errors("startup_channel_check", check, a)
+
+
+def check(a):
+    with Output(a.h5file) as out:
+        scene = out.scene
         rho, eta_s, eta_p, lam, F, y0, y1 = parameters(scene)
         eta0 = eta_s + eta_p
         nu0 = eta0 / rho
@@ -108,15 +82,12 @@ def main(argv=None):
         uc = 1.5 * ubar
         print(f"E = {E:.4g}, beta = {beta:.4g}, lambda = {lam:g} s, steady centreline velocity {uc:.4g} m/s")
         rows = []
-        frames = sorted(f["frames"].keys())
         last = None
-        for name in frames:
-            g = f["frames"][name]
-            t = float(g.attrs["time"])
-            kind = g["kind"][...]
-            fl = kind == 0
-            y = g["position"][...][fl, 1]
-            vx = g["velocity"][...][fl, 0]
+        for k, (name, t) in enumerate(out.frames):
+            g = out.read(k, ("kind", "position", "velocity"))
+            fl = g["kind"] == 0
+            y = g["position"][fl, 1]
+            vx = g["velocity"][fl, 0]
             Y = (y - yc) / half
             T = t / lam
             exact = waters_king(Y, T, E, beta) * ubar
@@ -128,7 +99,7 @@ def main(argv=None):
             cl_err = abs(cl_sim - cl_exact) / uc
             prof_err = float(np.max(np.abs(vx - exact))) / uc
             rows.append((t, T, cl_sim, cl_exact, cl_err, prof_err))
-            last = (g, fl, y, t)
+            last = (k, fl, y, t)
         bad = [r for r in rows if not r[4] < a.tolerance]
         print(f"{'t [s]':>9} {'t/lambda':>9} {'U_c sim':>12} {'U_c exact':>12} {'cl err %':>9} {'profile err %':>13}")
         for r in rows:
@@ -138,15 +109,15 @@ def main(argv=None):
             print(f"FAIL: centreline error above {100*a.tolerance:g} % at {len(bad)} frame(s), worst "
                   f"{100*max(r[4] for r in bad):.3f} % at t = {max(bad, key=lambda r: r[4])[0]:g} s")
         # steady stresses at the last frame
-        g, fl, y, t = last
+        k, fl, y, t = last
         if t / lam < 8:
             print(f"FAIL: the last frame is at t/lambda = {t/lam:.3g} < 8, not steady")
             ok = False
-        elif "extra_stress" not in g:
+        elif not out.has(k, "extra_stress"):
             print("FAIL: the frames have no extra_stress")
             ok = False
         else:
-            T = g["extra_stress"][...][fl]
+            T = out.read(k, ("extra_stress",))["extra_stress"][fl]
             yy = y - yc
             interior = np.abs(yy) <= half - a.interior * 2 * half
             dvdy = -F * yy / nu0
@@ -161,10 +132,10 @@ def main(argv=None):
                     print(f"FAIL: {nm} error {100*e:.3f} % >= {100*a.tolerance:g} %")
                     ok = False
         if a.csv:
-            with open(a.csv, "w") as out:
-                out.write("time_s,t_over_lambda,centreline_sim,centreline_exact,centreline_error,profile_error\n")
+            with open(a.csv, "w") as csv_file:
+                csv_file.write("time_s,t_over_lambda,centreline_sim,centreline_exact,centreline_error,profile_error\n")
                 for r in rows:
-                    out.write(",".join(f"{v:.10g}" for v in r) + "\n")
+                    csv_file.write(",".join(f"{v:.10g}" for v in r) + "\n")
         if a.png:
             import matplotlib
             matplotlib.use("Agg")

@@ -72,233 +72,12 @@ overshoot and undershoot do not. --transient-csv/--transient-png write the histo
 Exit status 0 when every check passes, 1 otherwise (2 for bad input).
 """
 import argparse
-import math
 import sys
-import tomllib
 
 import numpy as np
-from scipy import integrate, interpolate, optimize
 
-
-class Xpp:
-    """XPP parameters: G (Pa), lam_b (s), r (-), q (-), alpha (-), eta_s (Pa s)."""
-
-    def __init__(self, G, lam_b, r, q, alpha, eta_s=0.0):
-        self.G = float(G)
-        self.lam_b = float(lam_b)
-        self.r = float(r)
-        self.q = float(q)
-        self.nu = 2.0 / self.q
-        self.alpha = float(alpha)
-        self.eta_s = float(eta_s)
-
-    @property
-    def eta_p(self):
-        return self.G * self.lam_b
-
-    def F(self, tr, trsq):
-        L2 = 1.0 + tr / (3.0 * self.G)
-        if L2 <= 0:
-            raise ValueError(f"tr(tau) = {tr} <= -3G: Lambda undefined")
-        L = math.sqrt(L2)
-        return (2.0 * self.r * math.exp(self.nu * (L - 1.0)) * (1.0 - 1.0 / L)
-                + (1.0 - self.alpha * trsq / (3.0 * self.G ** 2)) / L2)
-
-    def rate(self, kappa, tau):
-        """dtau/dt for 3x3 kappa (kappa_ab = dv_a/dx_b) and tau (the ODE route)."""
-        tt = tau @ tau
-        Fv = self.F(np.trace(tau), np.trace(tt))
-        relax = (self.alpha / self.G) * tt + Fv * tau + self.G * (Fv - 1.0) * np.eye(3)
-        return kappa @ tau + tau @ kappa.T - relax / self.lam_b + self.G * (kappa + kappa.T)
-
-    def describe(self):
-        return (f"G = {self.G:g} Pa, lambda_0b = {self.lam_b:g} s, r = {self.r:g} "
-                f"(lambda_0s = {self.lam_b / self.r:g} s), q = {self.q:g}, alpha = {self.alpha:g}, "
-                f"eta_p = {self.eta_p:g} Pa s, eta_s = {self.eta_s:g} Pa s")
-
-
-def shear_residual(x, gdot, p):
-    """Steady simple shear, written out by components: x = (txx, txy, tyy, tzz)."""
-    txx, txy, tyy, tzz = x
-    tr = txx + tyy + tzz
-    trsq = txx * txx + 2 * txy * txy + tyy * tyy + tzz * tzz
-    Fv = p.F(tr, trsq)
-    a, G, lb = p.alpha, p.G, p.lam_b
-    return np.array([
-        2 * gdot * txy - (a / G * (txx * txx + txy * txy) + Fv * txx + G * (Fv - 1)) / lb,
-        gdot * tyy + G * gdot - (a / G * txy * (txx + tyy) + Fv * txy) / lb,
-        -(a / G * (txy * txy + tyy * tyy) + Fv * tyy + G * (Fv - 1)) / lb,
-        -(a / G * tzz * tzz + Fv * tzz + G * (Fv - 1)) / lb,
-    ])
-
-
-def _newton(gdot, p, guess):
-    scale = np.array([p.G, p.G, p.G, p.G])
-    fun = lambda z: shear_residual(z * scale, gdot, p) * p.lam_b / p.G
-    z, info, ier, msg = optimize.fsolve(fun, guess / scale, xtol=1e-13, full_output=True)
-    # fsolve may stop with "not making good progress" once at round-off: judge the residual
-    if not np.max(np.abs(fun(z))) <= 1e-11 * max(1.0, np.max(np.abs(z))):
-        raise RuntimeError(f"XPP steady shear: Newton did not converge at gdot = {gdot:g} 1/s: {msg}")
-    return z * scale
-
-
-def ucm_guess(gdot, p):
-    wi = p.lam_b * gdot
-    return np.array([2 * p.G * wi * wi, p.G * wi, 0.0, 0.0])
-
-
-def steady_shear(gdot, p, steps=None):
-    """(txx, txy, tyy, tzz) of steady shear at rate gdot, by Newton with continuation in gdot
-    from Wi = lambda_0b gdot = 0.01 (where the UCM solution is within 1e-4 of XPP)."""
-    if gdot == 0:
-        return np.zeros(4)
-    sign = 1.0 if gdot > 0 else -1.0
-    g = abs(gdot)
-    g0 = min(g, 0.01 / p.lam_b)
-    x = _newton(g0, p, ucm_guess(g0, p))
-    n = steps or max(2, int(math.ceil(8 * math.log10(g / g0 + 1))) + 2)
-    for gg in np.geomspace(g0, g, n)[1:]:
-        x = _newton(gg, p, x)
-    return np.array([x[0], sign * x[1], x[2], x[3]])
-
-
-def steady_shear_ode(gdot, p, t_end=None):
-    """The same by integrating the homogeneous ODE from tau = 0 (LSODA, rtol 1e-11)."""
-    kappa = np.zeros((3, 3))
-    kappa[0, 1] = gdot
-    idx = [(0, 0), (0, 1), (1, 1), (2, 2)]
-
-    def f(t, y):
-        tau = np.array([[y[0], y[1], 0], [y[1], y[2], 0], [0, 0, y[3]]])
-        d = p.rate(kappa, tau)
-        return [d[i, j] for i, j in idx]
-
-    t_end = t_end or 60 * p.lam_b
-    sol = integrate.solve_ivp(f, (0, t_end), np.zeros(4), method="LSODA", rtol=1e-11,
-                              atol=1e-12 * p.G)
-    if not sol.success:
-        raise RuntimeError(sol.message)
-    y = sol.y[:, -1]
-    if np.max(np.abs(f(0, y))) * p.lam_b > 1e-8 * max(p.G, np.max(np.abs(y))):
-        raise RuntimeError("the homogeneous ODE did not reach a steady state")
-    return y
-
-
-class FlowCurve:
-    """Steady shear on a dense log grid of rates (continuation), interpolated; inverted for
-    the rate at a given total shear stress T_xy = eta_s gdot + tau_xy."""
-
-    def __init__(self, p, gdot_max, n=1500):
-        self.p = p
-        g0 = 1e-4 / p.lam_b
-        g = np.geomspace(g0, gdot_max * 1.05, n)
-        x = _newton(g[0], p, ucm_guess(g[0], p))
-        rows = [x]
-        for gg in g[1:]:
-            x = _newton(gg, p, x)
-            rows.append(x)
-        tau = np.array(rows)
-        self.g = np.concatenate([[0.0], g])
-        self.tau = np.vstack([np.zeros(4), tau])
-        self.T = p.eta_s * self.g + self.tau[:, 1]
-        if np.any(np.diff(self.T) <= 0):
-            k = int(np.argmax(np.diff(self.T) <= 0))
-            raise RuntimeError(f"the flow curve T_xy(gdot) is not monotone near gdot = {self.g[k]:g} 1/s: "
-                               "the stress-controlled reference is not unique")
-        # interpolate in log(g) away from 0 and with the linear law below g0
-        self._lg = np.log(g)
-        self._splines = [interpolate.CubicSpline(self._lg, tau[:, k]) for k in range(4)]
-        self._inv = interpolate.CubicSpline(np.log(self.T[1:]), self._lg)
-
-    def tau_at_rate(self, gdot):
-        gdot = np.asarray(gdot, dtype=float)
-        a = np.abs(gdot)
-        out = np.zeros(a.shape + (4,))
-        lo = a < self.g[1]
-        hi = ~lo
-        if np.any(hi):
-            lg = np.log(a[hi])
-            for k in range(4):
-                out[hi, k] = self._splines[k](lg)
-        if np.any(lo):  # linear regime: tau_xy = eta_p gdot, normal stresses ~ gdot^2
-            s = a[lo] / self.g[1]
-            out[lo, 1] = self.tau[1, 1] * s
-            for k in (0, 2, 3):
-                out[lo, k] = self.tau[1, k] * s * s
-        out[..., 1] *= np.sign(gdot)
-        return out
-
-    def rate_at_stress(self, T):
-        T = np.asarray(T, dtype=float)
-        a = np.abs(T)
-        out = np.zeros(a.shape)
-        hi = a >= self.T[1]
-        if np.any(a > self.T[-1]):
-            raise RuntimeError("shear stress beyond the tabulated flow curve")
-        out[hi] = np.exp(self._inv(np.log(a[hi])))
-        out[~hi] = a[~hi] / (self.p.eta_s + self.p.eta_p)
-        return out * np.sign(T)
-
-
-def channel_reference(y, p, rho, F, y0, y1, curve=None, n=4001):
-    """Steady channel: T_xy, gdot, tau (4 components) and v_x at positions y."""
-    yc = 0.5 * (y0 + y1)
-    half = 0.5 * (y1 - y0)
-    Tw = rho * abs(F) * half
-    if curve is None:
-        # the wall rate: solve eta_s g + tau_xy(g) = Tw by bracketing on Newton solutions
-        gw = optimize.brentq(lambda g: p.eta_s * g + steady_shear(g, p)[1] - Tw,
-                             1e-6 * Tw / (p.eta_s + p.eta_p), 10 * Tw / max(p.eta_s, 1e-3 * p.eta_p))
-        curve = FlowCurve(p, gw)
-    y = np.asarray(y, dtype=float)
-    T = -rho * F * (y - yc)
-    g = curve.rate_at_stress(T)
-    tau = curve.tau_at_rate(g)
-    # v(y) = int_{y0}^{y} gdot dy', on a fine grid (Simpson), symmetric about y_c
-    s = np.linspace(y0, y1, n)
-    gs = curve.rate_at_stress(-rho * F * (s - yc))
-    vs = integrate.cumulative_trapezoid(gs, s, initial=0.0)
-    # (cumulative trapezoid, second order: n = 4001 gives ~1e-7 relative; tools/test_tools.py
-    # checks it against quadrature)
-    v = np.interp(y, s, vs)
-    return {"T_xy": T, "gdot": g, "tau": tau, "v": v, "curve": curve, "yc": yc, "half": half}
-
-
-def startup_1d(p, rho, F, y0, y1, times, n=128):
-    """Start-up from rest of the incompressible, fully developed channel flow, which is exactly
-    one-dimensional: rho dv/dt = rho F + d(T_xy)/dy, T_xy = eta_s dv/dy + tau_xy, and tau obeys
-    the homogeneous XPP equations at the local rate gdot = dv/dy (no convection: D/Dt = d/dt).
-    Method of lines: v at n cell centres across [y0, y1], no slip by mirrored ghost values, the
-    rate and tau at the n + 1 cell faces; LSODA (rtol 1e-8). Returns (y_cells, v[times, n],
-    tau[times, 4, n + 1], y_faces)."""
-    dy = (y1 - y0) / n
-    a_, G, lb = p.alpha, p.G, p.lam_b
-
-    def rhs(t, z):
-        v = z[:n]
-        txx, txy, tyy, tzz = z[n:].reshape(4, n + 1)
-        g = np.diff(np.concatenate([[-v[0]], v, [-v[-1]]])) / dy
-        tr = txx + tyy + tzz
-        trsq = txx * txx + 2 * txy * txy + tyy * tyy + tzz * tzz
-        L2 = 1.0 + tr / (3.0 * G)
-        L = np.sqrt(L2)
-        Fv = 2 * p.r * np.exp(p.nu * (L - 1)) * (1 - 1 / L) + (1 - a_ * trsq / (3 * G * G)) / L2
-        d = np.concatenate([
-            2 * g * txy - (a_ / G * (txx * txx + txy * txy) + Fv * txx + G * (Fv - 1)) / lb,
-            g * tyy + G * g - (a_ / G * txy * (txx + tyy) + Fv * txy) / lb,
-            -(a_ / G * (txy * txy + tyy * tyy) + Fv * tyy + G * (Fv - 1)) / lb,
-            -(a_ / G * tzz * tzz + Fv * tzz + G * (Fv - 1)) / lb])
-        dv = F + np.diff(p.eta_s * g + txy) / (dy * rho)
-        return np.concatenate([dv, d])
-
-    times = np.asarray(times, dtype=float)
-    sol = integrate.solve_ivp(rhs, (0.0, float(times[-1])), np.zeros(n + 4 * (n + 1)), method="LSODA",
-                              t_eval=times, rtol=1e-8, atol=1e-12 * max(p.G, rho * abs(F) * (y1 - y0)))
-    if not sol.success:
-        raise RuntimeError("1-D start-up: " + sol.message)
-    yc = y0 + dy * (np.arange(n) + 0.5)
-    yf = y0 + dy * np.arange(n + 1)
-    return yc, sol.y[:n].T, sol.y[n:].T.reshape(len(times), 4, n + 1), yf
+from vesph.analytic import Xpp, channel_reference, startup_1d, steady_shear, steady_shear_ode
+from vesph.output import Output, ToolError
 
 
 def scene_parameters(scene):
@@ -335,23 +114,20 @@ def local_slope(y, v, width):
 
 
 def read_frames(path):
-    import h5py
-    with h5py.File(path, "r") as f:
-        sc = f.attrs["scene"]
-        scene = tomllib.loads(sc.decode() if isinstance(sc, bytes) else str(sc))
-        dx = float(f.attrs["dx"])
+    """(scene, dx, frames): per frame its time and the fluid's y, v_x and, when stored, the
+    extra stress T (xx, xy, yy) and T_zz."""
+    with Output(path) as out:
         frames = []
-        for name in sorted(f["frames"].keys()):
-            g = f["frames"][name]
-            fl = g["kind"][...] == 0
-            fr = {"time": float(g.attrs["time"]), "y": g["position"][...][fl, 1],
-                  "vx": g["velocity"][...][fl, 0]}
+        for k, (_, t) in enumerate(out.frames):
+            g = out.read(k, ("kind", "position", "velocity"), optional=("extra_stress", "extra_stress_zz"))
+            fl = g["kind"] == 0
+            fr = {"time": t, "y": g["position"][fl, 1], "vx": g["velocity"][fl, 0]}
             if "extra_stress" in g:
-                fr["T"] = g["extra_stress"][...][fl]
+                fr["T"] = g["extra_stress"][fl]
             if "extra_stress_zz" in g:
-                fr["Tzz"] = g["extra_stress_zz"][...][fl]
+                fr["Tzz"] = g["extra_stress_zz"][fl]
             frames.append(fr)
-    return scene, dx, frames
+        return out.scene, out.dx, frames
 
 
 def central_rows(y, yc, half):
@@ -602,7 +378,7 @@ def main(argv=None):
         ok, ctx = check(a, scene, dx, frames)
         if a.transient and ctx is not None:
             ok = transient(a, frames, ctx) and ok
-    except (OSError, KeyError, ValueError, RuntimeError) as e:
+    except (OSError, KeyError, ValueError, RuntimeError, ToolError) as e:
         print(f"error: {e}")
         return 2
     print("RESULT: " + ("PASS" if ok else "FAIL"))

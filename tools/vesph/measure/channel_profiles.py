@@ -65,8 +65,8 @@ import sys
 
 import numpy as np
 
-import vesph_output
-from vesph_output import ToolError
+from vesph import output as vesph_output
+from vesph.output import Output, ToolError
 
 GENERIC_EFFECTS = {"continuity", "equation_of_state", "pressure_gradient", "viscosity",
                    "body_force", "velocity_gradient", "stress_divergence"}
@@ -74,14 +74,18 @@ PROG = "startup_channel_profiles"
 
 
 # ----------------------------------------------------------------------------- reading
-class Channel:
+class Channel(Output):
     """The channel geometry and the frames of one vesph output file."""
 
     def __init__(self, path):
-        self.f, _ = vesph_output.open_h5(path)
-        f = self.f
-        self.scene, self.dim, self.dx = vesph_output.read_header(f, path)
-        sc = self.scene
+        super().__init__(path)
+        # (name, time, step) of each frame
+        self.frames = [(nm, t, step) for (nm, t), step in zip(self.frames, self.steps)]
+        self.has_stress = self.has(0, "extra_stress")
+
+    def _check_scene(self):
+        """The channel's geometry from the scene's fluid blocks and domain."""
+        path, sc = self.path, self.scene
         blocks = [b for b in sc.get("blocks", []) if b.get("kind") == "fluid"]
         if not blocks:
             raise ToolError(f"{path}: the scene has no fluid block ([[blocks]] kind = "
@@ -101,52 +105,22 @@ class Channel:
             self.length = self.x1 - self.x0
         self.model = {k: v for k, v in sc.get("effects", {}).items()
                       if k not in GENERIC_EFFECTS}
-        if "frames" not in f or len(f["frames"]) == 0:
-            raise ToolError(f"{path} is not a vesph output with frames: no /frames groups")
-        self.frames = []
-        for name in sorted(f["frames"].keys()):
-            g = f["frames"][name]
-            if "time" not in g.attrs:
-                raise ToolError(f"{path}: frame {name} has no time attribute")
-            step = int(g.attrs["step"]) if "step" in g.attrs else -1
-            self.frames.append((name, float(g.attrs["time"]), step))
-        self.times = np.array([t for _, t, _ in self.frames])
-        g0 = f["frames"][self.frames[0][0]]
-        self.has_stress = "extra_stress" in g0
-        self.path = path
 
-    def close(self):
-        self.f.close()
-
-    def read(self, i):
+    def read_fluid(self, i):
         """Fluid data of frame i: dict with x, y, vx and (when present) txx, txy, tyy."""
         name = self.frames[i][0]
-        g = self.f["frames"][name]
-        for ds in ("kind", "position", "velocity"):
-            if ds not in g:
-                raise ToolError(f"{self.path}: frame {name} has no dataset {ds!r}")
-        kind = g["kind"][...]
-        fl = kind == 0
+        if self.has_stress and not self.has(i, "extra_stress"):
+            raise ToolError(f"{self.path}: frame {name} has no extra_stress, frame "
+                            f"{self.frames[0][0]} has")
+        g = self.read(i, ("kind", "position", "velocity") + (("extra_stress",) if self.has_stress else ()))
+        fl = g["kind"] == 0
         if not np.any(fl):
             raise ToolError(f"{self.path}: frame {name} (t = {self.frames[i][1]:.6g} s) has "
                             "no fluid particles (kind 0)")
-        pos = g["position"][...]
-        vel = g["velocity"][...]
-        n = len(kind)
-        if pos.shape != (n, self.dim) or vel.shape != (n, self.dim):
-            raise ToolError(f"{self.path}: frame {name}: position {pos.shape} / velocity "
-                            f"{vel.shape} do not match {n} particles in {self.dim}D")
+        pos, vel = g["position"], g["velocity"]
         d = {"x": pos[fl, 0], "y": pos[fl, 1], "vx": vel[fl, 0]}
         if self.has_stress:
-            if "extra_stress" not in g:
-                raise ToolError(f"{self.path}: frame {name} has no extra_stress, frame "
-                                f"{self.frames[0][0]} has")
-            T = g["extra_stress"][...]
-            ncomp = 3 if self.dim == 2 else 6
-            if T.shape != (n, ncomp):
-                raise ToolError(f"{self.path}: frame {name}: extra_stress has shape "
-                                f"{T.shape}, expected ({n}, {ncomp})")
-            T = T[fl]
+            T = g["extra_stress"][fl]
             iyy = 2 if self.dim == 2 else 3        # 2D: xx xy yy; 3D: xx xy xz yy yz zz
             d["txx"], d["txy"], d["tyy"] = T[:, 0], T[:, 1], T[:, iyy]
         return d
@@ -404,7 +378,7 @@ def _run(ch, a, out):
     hist, prof_rows, curves, summary = [], [], [], []
     methods = {}
     for i, (name, t, step) in enumerate(ch.frames):
-        d = ch.read(i)
+        d = ch.read_fluid(i)
         labels, nrow, method = cluster_rows(d["y"], ch.dx, ch.y0)
         methods.setdefault(method, []).append(name)
         vc, nc, used = centreline(d, labels, nrow, ch)

@@ -108,104 +108,42 @@ import sys
 
 import numpy as np
 
-import vesph_output
-from vesph_output import ToolError
+from vesph import output as vesph_output
+from vesph.output import Output, ToolError
 
 PROG = "die_swell_measure"
 STRESS_COLS = ("Txx_Pa", "Tyy_Pa", "Txy_Pa", "N1_Pa")
 
 
-class Run:
-    """The header and frame list of one vesph output."""
+class Run(Output):
+    """The header and frame list of one vesph output (a run still writing it may be measured:
+    the file is opened without locking, a half-written last frame skipped)."""
 
     def __init__(self, path):
-        self.path = path
-        self.notes = []
-        self.f, note = vesph_output.open_h5(path, allow_unlocked=True)
-        self.live = note is not None
-        if note:
-            self.notes.append(note)
-        try:
-            self._init()
-        except Exception:
-            self.f.close()
-            raise
+        super().__init__(path, live=True, partial_last_frame=True)
+        self.has_stress = self.has(len(self.frames) - 1, "extra_stress")
 
-    def _init(self):
-        f, path = self.f, self.path
-        self.scene, self.dim, self.dx = vesph_output.read_header(f, path)
+    def _check_scene(self):
+        path = self.path
         if self.dim != 2:
             raise ToolError(f"{path}: a {self.dim}D output; die_swell_measure measures 2D "
                             "(planar) die swell only")
         if not (self.dx > 0):
             raise ToolError(f"{path}: particle spacing dx = {self.dx:g}, expected > 0")
-        self.name = str(self.scene.get("name", os.path.splitext(os.path.basename(path))[0]))
-        if "frames" not in f or len(f["frames"]) == 0:
-            raise ToolError(f"{path} is not a vesph output with frames: no /frames groups")
-        frames = []
-        names = sorted(f["frames"].keys())
-        for k, nm in enumerate(names):
-            g = f["frames"][nm]
-            if "time" not in g.attrs:
-                if k == len(names) - 1 and k > 0:
-                    self.notes.append(f"frame {nm} has no time yet (being written): skipped")
-                    continue
-                raise ToolError(f"{path}: frame {nm} has no time attribute")
-            frames.append((float(g.attrs["time"]), nm))
-        if not frames:
-            raise ToolError(f"{path}: no complete frame")
-        frames.sort()
-        self.frames = [(nm, t) for t, nm in frames]
-        self.has_stress = "extra_stress" in f["frames"][self.frames[-1][0]]
 
-    def close(self):
-        self.f.close()
-
-    def read(self, k, full=False):
-        """Frame k: dict with kind [n], position [n, 2]; with full also velocity [n, 2] and
-        (when present) extra_stress [n, 3]."""
-        nm = self.frames[k][0]
-        g = self.f["frames"][nm]
-        need = ["kind", "position"] + (["velocity"] if full else [])
-        for ds in need:
-            if ds not in g:
-                raise ToolError(f"{self.path}: frame {nm} has no dataset {ds!r}")
-        out = {"kind": g["kind"][...], "position": g["position"][...]}
-        n = len(out["kind"])
-        if "mass" in g and "density" in g:
-            m, rho = g["mass"][...], g["density"][...]
-            if m.shape == (n,) and rho.shape == (n,):
-                with np.errstate(divide="ignore", invalid="ignore"):
-                    out["volume"] = m / rho
-        if out["position"].shape != (n, 2):
-            raise ToolError(f"{self.path}: frame {nm}: position has shape "
-                            f"{out['position'].shape}, expected ({n}, 2)")
-        if full:
-            out["velocity"] = g["velocity"][...]
-            if out["velocity"].shape != (n, 2):
-                raise ToolError(f"{self.path}: frame {nm}: velocity has shape "
-                                f"{out['velocity'].shape}, expected ({n}, 2)")
-            if "extra_stress" in g:
-                T = g["extra_stress"][...]
-                if T.shape != (n, 3):
-                    raise ToolError(f"{self.path}: frame {nm}: extra_stress has shape "
-                                    f"{T.shape}, expected ({n}, 3) (xx, xy, yy)")
-                out["extra_stress"] = T
-        return out
-
-
-def read_frame(run, k, full=False):
-    """run.read(k); an unreadable last frame of a file still being written gives None."""
-    try:
-        return run.read(k, full)
-    except (ToolError, OSError, KeyError, ValueError, RuntimeError) as e:
-        if isinstance(e, ToolError) and not run.live:
-            raise
-        nm = run.frames[k][0]
-        if run.live and k == len(run.frames) - 1 and k > 0:
-            run.notes.append(f"frame {nm} could not be read ({e}; being written?): skipped")
+    def read_frame(self, k, full=False):
+        """Frame k: dict with kind [n], position [n, 2] and (when mass and density are there)
+        volume [n]; with full also velocity [n, 2] and (when present) extra_stress [n, 3]
+        (xx, xy, yy). None for an unreadable last frame of a file still being written."""
+        need = ("kind", "position") + (("velocity",) if full else ())
+        d = self.read_or_skip(k, need, optional=("mass", "density") + (("extra_stress",) if full else ()))
+        if d is None:
             return None
-        raise ToolError(f"{run.path}: frame {nm} cannot be read ({e})")
+        m, rho = d.pop("mass", None), d.pop("density", None)
+        if m is not None and rho is not None:
+            with np.errstate(divide="ignore", invalid="ignore"):
+                d["volume"] = m / rho
+        return d
 
 
 # -------------------------------------------------------------------------- measures
@@ -245,7 +183,7 @@ def measure_swell(run, a):
     half = 0.5 * a.window * run.dx
     half_filled = 0.5 * a.filled_window * run.dx
     for k, (nm, t) in enumerate(run.frames):
-        fr = read_frame(run, k)
+        fr = run.read_frame(k)
         if fr is None:
             break
         fluid = fr["kind"] == 0
@@ -500,7 +438,7 @@ def run(a, out=sys.stdout):
         if k >= len(rows):            # the last frame was unreadable (being written)
             k = len(rows) - 1
         a.prof_t = r.frames[k][1]
-        fr = read_frame(r, k, full=True)
+        fr = r.read_frame(k, full=True)
         if fr is None:
             raise ToolError(f"{r.path}: the profile frame cannot be read")
         has_stress = "extra_stress" in fr

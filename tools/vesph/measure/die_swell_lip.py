@@ -48,10 +48,8 @@ import warnings
 
 import numpy as np
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, HERE)
-import die_swell_measure as dsm  # noqa: E402
-from vesph_output import ToolError  # noqa: E402
+from vesph.measure import die_swell as dsm
+from vesph.output import ToolError
 
 COLUMNS = ["run", "x0_m", "x1_m", "u_centre_m_s", "u_outer_m_s", "p_centre_Pa", "p_outer_Pa",
            "T_yy_outer_Pa", "balance_outer_Pa", "count_ratio", "v_outward_outer_m_s",
@@ -60,22 +58,20 @@ COLUMNS = ["run", "x0_m", "x1_m", "u_centre_m_s", "u_outer_m_s", "p_centre_Pa", 
 
 def frames_of(run, n):
     """The last n frames' fluid particles: position, velocity, pressure and, with a stress
-    field, T_xx and T_yy (die_swell_measure's reader checks the shapes; the pressure is read
-    here)."""
+    field, T_xx and T_yy (the output reader checks the shapes)."""
     out = []
     for k in range(max(0, len(run.frames) - n), len(run.frames)):
         nm = run.frames[k][0]
-        g = run.f["frames"][nm]
+        g = run.group(k)
         if "pressure" not in g:
             raise ToolError(f"{run.path}: frame {nm} has no pressure")
-        fr = run.read(k, full=True)
-        fluid = fr["kind"] == 0
-        d = {"position": fr["position"][fluid], "velocity": fr["velocity"][fluid],
-             "pressure": g["pressure"][...][fluid]}
         for key in ("mass", "density"):
             if key not in g:
                 raise ToolError(f"{run.path}: frame {nm} has no {key}")
-            d[key] = g[key][...][fluid]
+        fr = run.read(k, ("kind", "position", "velocity", "pressure", "mass", "density"),
+                      optional=("extra_stress",))
+        fluid = fr["kind"] == 0
+        d = {key: fr[key][fluid] for key in ("position", "velocity", "pressure", "mass", "density")}
         if "extra_stress" in fr:
             d["T_xx"] = fr["extra_stress"][fluid, 0]  # stored xx, xy, yy
             d["T_yy"] = fr["extra_stress"][fluid, 2]

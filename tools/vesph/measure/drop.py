@@ -107,74 +107,26 @@ import sys
 
 import numpy as np
 
-import vesph_output
-from vesph_output import ToolError
+from vesph import kernels
+from vesph import output as vesph_output
+from vesph.output import Output, ToolError
 
 PROG = "drop_measure"
 MAX_GRID_POINTS = 2_000_000
 
 
-def open_h5(path):
-    """Open read-only; a file locked by a running writer is opened without locking."""
-    return vesph_output.open_h5(path, allow_unlocked=True)
-
-
-# Kernel profiles f(q), support q_max and normalisation sigma_D (W = sigma/h^D f(r/h)), as in
-# include/vesph/core/kernel.hpp (thesis eqs. 3.3, 3.4; Wendland C2).
-def _cubic(q):
-    return np.where(q < 1.0, 2.0 / 3.0 - q * q + 0.5 * q ** 3,
-                    np.where(q < 2.0, (2.0 - np.minimum(q, 2.0)) ** 3 / 6.0, 0.0))
-
-
-def _quintic(q):
-    a, b, c = (np.maximum(3.0 - q, 0.0), np.maximum(2.0 - q, 0.0), np.maximum(1.0 - q, 0.0))
-    return a ** 5 - 6.0 * b ** 5 + 15.0 * c ** 5
-
-
-def _wendland_c2(q):
-    a = np.maximum(1.0 - 0.5 * q, 0.0)
-    return a ** 4 * (2.0 * q + 1.0)
-
-
-KERNELS = {  # name: (f, support q, {dim: sigma})
-    "cubic": (_cubic, 2.0, {2: 15.0 / (7.0 * math.pi), 3: 3.0 / (2.0 * math.pi)}),
-    "quintic": (_quintic, 3.0, {2: 7.0 / (478.0 * math.pi), 3: 1.0 / (120.0 * math.pi)}),
-    "wendland_c2": (_wendland_c2, 2.0, {2: 7.0 / (4.0 * math.pi), 3: 21.0 / (16.0 * math.pi)}),
-}
-
-
-class Drop:
-    """The scene geometry and frame list of one vesph drop-impact output."""
+class Drop(Output):
+    """The scene geometry and frame list of one vesph drop-impact output (a run still writing
+    it may be measured: the file is opened without locking, a half-written last frame skipped)."""
 
     def __init__(self, path, wall_y=None):
-        self.path = path
-        self.notes = []
-        self.f, note = open_h5(path)
-        self.live = note is not None
-        if note:
-            self.notes.append(note)
-        try:
-            self._init(wall_y)
-        except Exception:
-            self.f.close()
-            raise
+        self._wall_y = wall_y
+        super().__init__(path, live=True, partial_last_frame=True)
 
-    def _init(self, wall_y):
-        f, path = self.f, self.path
-        self.scene, self.dim, self.dx = vesph_output.read_header(f, path)
+    def _check_scene(self):
+        """The disk block (D, centre, V) and the wall below it, from the scene."""
+        path, wall_y = self.path, self._wall_y
         sc = self.scene
-        parts = sc.get("particles", {})
-        self.kernel = vesph_output.as_str(f.attrs["kernel"]) if "kernel" in f.attrs \
-            else str(parts.get("kernel", "quintic"))
-        if self.kernel not in KERNELS:
-            raise ToolError(f"{path}: unknown kernel {self.kernel!r} (expected one of "
-                            f"{', '.join(KERNELS)})")
-        try:
-            self.h = float(f.attrs["h"]) if "h" in f.attrs \
-                else float(parts.get("smoothing_ratio", 1.6)) * self.dx
-        except (TypeError, ValueError):
-            raise ToolError(f"{path}: the smoothing length h is not a number")
-        self.name = str(sc.get("name", os.path.splitext(os.path.basename(path))[0]))
         blocks = sc.get("blocks", [])
         disks = [b for b in blocks if b.get("kind") == "fluid"
                  and b.get("shape") in ("disk", "sphere")]
@@ -212,43 +164,17 @@ class Drop:
                                 "\"wall\" with max[1] below the disk); give --wall-y")
             self.wall_y = max(tops)
             self.wall_note = "top of the wall block below the drop"
-        if "frames" not in f or len(f["frames"]) == 0:
-            raise ToolError(f"{path} is not a vesph output with frames: no /frames groups")
-        self.frames = []
-        names = sorted(f["frames"].keys())
-        for k, nm in enumerate(names):
-            g = f["frames"][nm]
-            if "time" not in g.attrs:
-                if k == len(names) - 1:
-                    self.notes.append(f"frame {nm} has no time yet (being written): skipped")
-                    continue
-                raise ToolError(f"{path}: frame {nm} has no time attribute")
-            self.frames.append((nm, float(g.attrs["time"])))
-        if not self.frames:
-            raise ToolError(f"{path}: no complete frame")
 
-    def close(self):
-        self.f.close()
-
-    def read(self, k):
+    def read_fluid(self, k):
         """(positions [n, dim], mass [n], density [n]) of the fluid particles of frame k, and
         (positions, masses) of all particles (fluid and walls) for the summation density."""
-        nm = self.frames[k][0]
-        g = self.f["frames"][nm]
-        for ds in ("kind", "position", "mass", "density"):
-            if ds not in g:
-                raise ToolError(f"{self.path}: frame {nm} has no dataset {ds!r}")
-        kind = g["kind"][...]
-        pos = g["position"][...]
-        m = g["mass"][...]
-        rho = g["density"][...]
-        n = len(kind)
-        if pos.shape != (n, self.dim) or m.shape != (n,) or rho.shape != (n,):
-            raise ToolError(f"{self.path}: frame {nm}: position {pos.shape}, mass {m.shape}, "
-                            f"density {rho.shape} do not match {n} particles in {self.dim}D")
+        d = self.read_or_skip(k, ("kind", "position", "mass", "density"))
+        if d is None:
+            return None
+        kind, pos, m, rho = d["kind"], d["position"], d["mass"], d["density"]
         fl = kind == 0
         if not np.any(fl):
-            raise ToolError(f"{self.path}: frame {nm} has no fluid particles (kind 0)")
+            raise ToolError(f"{self.path}: frame {self.frames[k][0]} has no fluid particles (kind 0)")
         return pos[fl], m[fl], rho[fl], pos, m
 
 
@@ -345,38 +271,23 @@ def interior_density(drop, pos, pos_all, m_all, to_open, grid):
     (up to a grid spacing off): a particle counts when to_open >= the support radius + grid."""
     from scipy.spatial import cKDTree
 
-    f, q_max, sigma = KERNELS[drop.kernel]
-    radius = q_max * drop.h
+    kernel = kernels.Kernel.for_output(drop)
+    radius = kernel.support * drop.h
     inner = np.flatnonzero(to_open >= radius + grid)
     if inner.size == 0:
         return float("nan"), 0
     pairs = cKDTree(pos[inner]).sparse_distance_matrix(cKDTree(pos_all), radius,
                                                         output_type="coo_matrix")
-    w = sigma[drop.dim] / drop.h ** drop.dim * f(pairs.data / drop.h)
+    w = kernel.W(pairs.data / drop.h) / drop.h ** drop.dim
     # the pairs include each particle with itself (distance 0)
     rho = np.bincount(pairs.row, weights=w * m_all[pairs.col], minlength=inner.size)
     return float(np.mean(rho)), int(inner.size)
 
 
-def _read(drop, k):
-    """drop.read(k), or None for an unreadable last frame of a file still being written."""
-    nm = drop.frames[k][0]
-    try:
-        return drop.read(k)
-    except (ToolError, OSError, KeyError, ValueError, RuntimeError) as e:
-        if isinstance(e, ToolError) and not drop.live:
-            raise
-        if k == len(drop.frames) - 1 and k > 0:
-            drop.notes.append(f"frame {nm} could not be read ({e}; being written?): skipped")
-            return None
-        raise ToolError(f"{drop.path}: frame {nm} cannot be read ({e}); if the run is "
-                        "still writing, copy the file and measure the copy")
-
-
 def measure(drop, a):
     """Rows (dicts) for the frames with t V/D <= a.until (all without --until)."""
     dx, D, V = drop.dx, drop.D, drop.V
-    first = _read(drop, 0)
+    first = drop.read_fluid(0)
     if first is None:
         raise ToolError(f"{drop.path}: the first frame cannot be read")
     vol_first = float(np.sum(first[1] / first[2]))
@@ -390,7 +301,7 @@ def measure(drop, a):
         tvd = t * V / D
         if a.until is not None and tvd > a.until + 1e-9 * max(1.0, abs(a.until)):
             break
-        got = first if k == 0 else _read(drop, k)
+        got = first if k == 0 else drop.read_fluid(k)
         if got is None:
             break
         pos, m, rho, pos_all, m_all = got

@@ -25,16 +25,15 @@ import sys
 
 import numpy as np
 
-import vesph_output
-from vesph_output import ToolError
+from vesph import output as vesph_output
+from vesph.output import Output, ToolError
 
 PROG = "hydrostatic_check.py"
 
 
 def run(a):
-    f, note = vesph_output.open_h5(a.h5file)
-    with f:
-        scene, dim, dx = vesph_output.read_header(f, a.h5file)
+    with Output(a.h5file) as out:
+        scene, dim, dx = out.scene, out.dim, out.dx
         try:
             g = float(np.linalg.norm(scene["effects"]["body_force"]["acceleration"]))
             rho0 = float(scene["fluid"]["density"])
@@ -47,20 +46,19 @@ def run(a):
         top = max(b["max"][dim - 1] for b in fluid_blocks)
         rows, ok = [], True
         print(f"{'time [s]':>10} {'y_s [m]':>10} {'p error/(rho g H)':>18} {'max|v|/sqrt(gH)':>16}  status")
-        for name in sorted(f["frames"].keys()):
-            fr = f["frames"][name]
-            t = float(fr.attrs["time"])
+        for k, (name, t) in enumerate(out.frames):
             if t <= 0 or (a.time_from is not None and t < a.time_from) or (a.until is not None and t > a.until):
                 continue
-            fluid = fr["kind"][:] == 0
-            x = fr["position"][:][fluid]
-            if "pressure" not in fr:
+            if not out.has(k, "pressure"):
                 raise ToolError(f"{a.h5file}: frame {name} has no pressure", 2)
-            p = fr["pressure"][:][fluid]
-            v = fr["velocity"][:][fluid]
+            fr = out.read(k, ("kind", "position", "pressure", "velocity"), optional=("free_surface",))
+            fluid = fr["kind"] == 0
+            x = fr["position"][fluid]
+            p = fr["pressure"][fluid]
+            v = fr["velocity"][fluid]
             y = x[:, dim - 1]
-            if "free_surface" in fr and fr["free_surface"][:][fluid].any():
-                ys = float(y[fr["free_surface"][:][fluid] > 0].mean())
+            if "free_surface" in fr and fr["free_surface"][fluid].any():
+                ys = float(y[fr["free_surface"][fluid] > 0].mean())
             else:
                 ys = top
             H = ys - bottom
@@ -77,10 +75,10 @@ def run(a):
         if not rows:
             raise ToolError(f"{a.h5file}: no frame in the requested time range", 2)
         if a.csv:
-            with open(a.csv, "w") as out:
-                out.write("time,surface_height,pressure_error,max_speed_over_sqrt_gH,pass\n")
+            with open(a.csv, "w") as csv_file:
+                csv_file.write("time,surface_height,pressure_error,max_speed_over_sqrt_gH,pass\n")
                 for r in rows:
-                    out.write(f"{r[0]:.9g},{r[1]:.9g},{r[2]:.6e},{r[3]:.6e},{int(r[4])}\n")
+                    csv_file.write(f"{r[0]:.9g},{r[1]:.9g},{r[2]:.6e},{r[3]:.6e},{int(r[4])}\n")
     print(f"tolerances: pressure {a.tolerance:g} of rho g H below {a.layers:g} layers, speed {a.max_speed:g} sqrt(gH)")
     print("RESULT: " + ("PASS" if ok else "FAIL"))
     return 0 if ok else 1

@@ -27,7 +27,7 @@ import sys
 
 import numpy as np
 
-from vesph_output import ToolError, open_h5, read_header, run_reporting_errors
+from vesph.output import Output, ToolError, run_reporting_errors
 
 
 def main(argv=None):
@@ -47,22 +47,14 @@ def main(argv=None):
 def run(args):
     if args.profile_x is not None and not (args.mean_velocity and args.mean_velocity > 0):
         raise ToolError("--profile-x needs --mean-velocity U > 0 (m/s)", 2)
-    f, _ = open_h5(args.h5)
-    with f:
-        _, _, dx = read_header(f, args.h5)
-        if "frames" not in f or len(f["frames"]) == 0:
-            raise ToolError(f"{args.h5}: no frames")
+    with Output(args.h5) as out:
+        dx = out.dx
+        f = out.f
         if "diagnostics" not in f or "released" not in f["diagnostics"]:
             raise ToolError(f"{args.h5}: no open-boundary diagnostics (released, removed, fluid_particles): "
                             "the scene has no [inflow] or [outflow]")
-        d = f["diagnostics"]
-        t_rows = d["time"][:]
-        released = d["released"][:]
-        removed = d["removed"][:]
-        fluid = d["fluid_particles"][:]
-        names = sorted(f["frames"])
-        frames = [f["frames"][n] for n in names]
-        kinds0 = frames[0]["kind"][:]
+        t_rows, released, removed, fluid = out.diagnostics("time", "released", "removed", "fluid_particles")
+        kinds0 = out.read(0, ("kind",))["kind"]
         initial = int(np.count_nonzero(kinds0 == 0))
         failures = []
 
@@ -78,10 +70,10 @@ def run(args):
         seen_max = -1
         prev_ids = None
         mass0 = None
-        for name, g in zip(names, frames):
-            t = float(g.attrs["time"])
-            kind = g["kind"][:]
-            ids = g["id"][:].astype(np.int64)
+        for k, (name, t) in enumerate(out.frames):
+            g = out.read(k, ("kind", "id", "mass"))
+            kind = g["kind"]
+            ids = g["id"].astype(np.int64)
             nf = int(np.count_nonzero(kind == 0))
             if len(np.unique(ids)) != len(ids):
                 failures.append(f"frame {name}: duplicate ids")
@@ -97,13 +89,13 @@ def run(args):
                                     f"(ids up to {seen_max} were seen before)")
             prev_ids = fluid_ids
             seen_max = max(seen_max, int(ids.max()))
-            m = g["mass"][:][kind == 0]
+            m = g["mass"][kind == 0]
             if mass0 is None and len(m):
                 mass0 = m[0]
             if len(m) and np.max(np.abs(m - mass0)) > 1e-12 * mass0:
                 failures.append(f"frame {name}: fluid masses differ")
 
-        print(f"inflow_check: {len(frames)} frames, {len(t_rows)} steps; fluid particles {initial} -> {int(fluid[-1])}; "
+        print(f"inflow_check: {len(out.frames)} frames, {len(t_rows)} steps; fluid particles {initial} -> {int(fluid[-1])}; "
               f"released {int(released[-1])}, removed {int(removed[-1])}")
 
         if args.profile_x is not None:
@@ -113,12 +105,11 @@ def run(args):
             cnt = np.zeros(nrows)
             ysum = np.zeros(nrows)
             used = 0
-            for g in frames:
-                if float(g.attrs["time"]) < args.t_from:
+            for k, (_, t) in enumerate(out.frames):
+                if t < args.t_from:
                     continue
-                kind = g["kind"][:]
-                x = g["position"][:]
-                v = g["velocity"][:]
+                g = out.read(k, ("kind", "position", "velocity"))
+                kind, x, v = g["kind"], g["position"], g["velocity"]
                 sel = (kind == 0) & (np.abs(x[:, 0] - args.profile_x) <= dx)
                 y = x[sel, 1]
                 b = np.clip(np.floor((y - y0) / dx).astype(int), 0, nrows - 1)

@@ -50,7 +50,8 @@ import argparse
 import math
 import sys
 
-import study_common as sc
+from vesph import limits
+from vesph.studies import common as sc
 
 STUDY = "cfl"
 INTEGRATORS = [("leapfrog", None), ("midpoint", None), ("arkode-fixed", "DORMAND_PRINCE_7_4_5"),
@@ -104,8 +105,9 @@ def main(argv=None):
          lambda k: f"integrator.cfl={sc.fnum(k)}", lambda k: k * h / c_ac),
     ]
     for sweep, coefs, t_end, extra, c, key_set, step_of in sweeps:
+        lim = sc.step_limits(h, c, vesph=a.vesph)
         print(f"# sweep {sweep}: c = {c:.4g} m/s, t_end = {t_end} s; with default coefficients "
-              f"acoustic {0.125 * h / c:.3g} s, viscous {0.125 * h * h / sc.NU:.3g} s",
+              f"acoustic {lim['acoustic']:.3g} s, viscous {lim['viscous']:.3g} s",
               file=sys.stderr)
         for kind, table in INTEGRATORS:
             series = sc.integrator_label(kind, table)
@@ -145,8 +147,10 @@ def main(argv=None):
           f"OMP_NUM_THREADS = {a.threads}, checks.max_speed = 1e-4 m/s")
     print(f"viscous sweep: c = {c_visc:.4g} m/s, cfl = 1.0, t_end = {t_visc} s, "
           f"step = coef x h^2/nu = coef x {h * h / sc.NU:.3g} s")
-    print(f"acoustic sweep: c = {c_ac:g} m/s, viscous_coefficient = 0.125 "
-          f"({0.125 * h * h / sc.NU:.3g} s), t_end = {t_ac} s, step = coef x h/(c+vmax) "
+    lim = sc.step_limits(h, c_ac, vesph=a.vesph)
+    print(f"acoustic sweep: c = {c_ac:g} m/s, viscous_coefficient = "
+          f"{limits.default_coefficients(vesph=a.vesph)['viscous']:g} "
+          f"({lim['viscous']:.3g} s), t_end = {t_ac} s, step = coef x h/(c+vmax) "
           f"= coef x {h / c_ac:.3g} s")
     print("err analytic = max |vx - v| / (F H^2/(8 nu)) at t_end; '-' for unstable runs\n")
     sc.print_table(rows, COLUMNS)

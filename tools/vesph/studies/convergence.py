@@ -43,7 +43,7 @@ import sys
 
 import numpy as np
 
-import study_common as sc
+from vesph.studies import common as sc
 
 STUDY = "convergence"
 ROUNDOFF = 1e-13
@@ -90,7 +90,7 @@ def main(argv=None):
         for ny in sorted(nys):
             run = runner.run(f"spatial leapfrog H/{ny}", sc.geometry(ny), a.t_end)
             h = sc.SMOOTHING_RATIO * sc.H / ny
-            lim = sc.step_limits(h, sc.rule_sound_speed(0.01))
+            lim = sc.step_limits(h, sc.rule_sound_speed(0.01), vesph=a.vesph)
             row = {"ny": ny, "dx": sc.H / ny, "h": h, "n_fluid": 20 * ny, "status": run.status,
                    "steps": run.steps, "limit": lim["controls"],
                    "mean_dt": a.t_end / run.steps if run.ok and run.steps > 0 else math.nan,

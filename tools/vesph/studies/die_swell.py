@@ -110,10 +110,9 @@ import sys
 import time
 import tomllib
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-ROOT = os.path.dirname(HERE)
+from vesph import REPO as ROOT, tool_command, tool_environment
+
 BASE_CASE = os.path.join(ROOT, "cases", "die_swell_second_order_fluid.toml")
-sys.path.insert(0, HERE)
 
 RHO, MU, W = 1000.0, 10.0, 0.01           # kg/m^3, Pa s, m (thesis §4.3)
 DIE_INLET, DIE_EXIT, OUTFLOW = 0.15, 0.2, 0.30
@@ -337,15 +336,15 @@ def extrudate_clusters(h5, frame=None):
     exit), where the start-up front's stragglers stay held by the wall; they are counted among
     clusters/detached as well."""
     import numpy as np
-    from drop_measure import clusters
-    import die_swell_measure as dsm
+    from vesph.measure.drop import clusters
+    from vesph.measure.die_swell import Run
 
-    r = dsm.Run(h5)
+    r = Run(h5)
     try:
         k = len(r.frames) - 1 if frame is None else frame
-        fr = dsm.read_frame(r, k)
+        fr = r.read_frame(k)
         if fr is None and k > 0 and frame is None:
-            fr = dsm.read_frame(r, k - 1)
+            fr = r.read_frame(k - 1)
         pos = fr["position"][fr["kind"] == 0]
         pos = pos[(pos[:, 0] >= DIE_EXIT - W) & (pos[:, 0] <= 0.28)]
         n, detached, _, _, largest = clusters(pos, 1.5 * r.dx, 5)
@@ -393,9 +392,9 @@ def measure(run, d, rc, wall, png):
             row["message"] = js["message"]
     if not os.path.exists(h5):
         return row
-    m = subprocess.run([sys.executable, os.path.join(HERE, "die_swell_measure.py"), h5,
+    m = subprocess.run(tool_command("vesph.measure.die_swell") + [h5,
                         "--out-dir", d, "--prefix", run.label] + ([] if png else ["--no-png"]),
-                       capture_output=True, text=True)
+                       capture_output=True, text=True, env=tool_environment())
     sj = os.path.join(d, run.label + "_summary.json")
     if m.returncode == 0 and os.path.exists(sj):
         with open(sj) as fh:

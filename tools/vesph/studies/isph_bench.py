@@ -21,6 +21,9 @@ import subprocess
 import sys
 import tempfile
 
+from vesph.catalogue import DEFAULT_VESPH
+from vesph.output import Output
+
 SCENE = """name = "isph_bench"
 dimension = 2
 [domain]
@@ -76,7 +79,7 @@ def solver_keys(name):
 
 def main(argv=None):
     ap = argparse.ArgumentParser(prog="isph_bench.py", description=__doc__.split("\n\n")[0])
-    ap.add_argument("--vesph", default=os.path.join(os.path.dirname(__file__), "..", "build", "vesph"))
+    ap.add_argument("--vesph", default=DEFAULT_VESPH)
     ap.add_argument("--sizes", default="100,200,400", help="particles across the tank (N: N^2 fluid particles)")
     ap.add_argument("--steps", type=int, default=5)
     ap.add_argument("--solvers", default="umfpack,klu,bicgstab+diagonal,bicgstab+ilut")
@@ -114,9 +117,8 @@ def main(argv=None):
                     s = json.load(f)
                 i = s["isph"]
                 k = max(i["solves"], 1)
-                import h5py
-                with h5py.File(os.path.join(out, "isph_bench.h5"), "r") as h:
-                    unknowns = int(h["diagnostics"]["pressure_unknowns"][-1])
+                with Output(os.path.join(out, "isph_bench.h5")) as h:
+                    unknowns = int(h.diagnostics("pressure_unknowns")[0][-1])
                 row = (n * n, solver, unknowns, i["assembly_seconds"] / k, i["solve_seconds"] / k,
                        (i["assembly_seconds"] + i["solve_seconds"] + i["correction_seconds"]) / k,
                        s["wall_seconds"] / max(s["steps"], 1), i["iterations_mean"])

@@ -23,7 +23,7 @@ Per run: c, the stability limits (theory.md section 8, v_max = 0; h = 4e-5 m):
 acoustic 0.125 h/c, viscous 0.125 h^2/nu = 2e-4 s, and which is smaller; the measured mean
 step t_end/steps; for arkode the fraction of steps at the stability limit, the median
 step / limit and the step control ("limit", "held" at a constant step just below it, or
-"error"; see study_common.step_control); max density deviation
+"error"; see vesph.studies.common.step_control); max density deviation
 max |rho/rho0 - 1| over the run (summary.json) and its ratio to delta; error vs analytic at
 t_end (max |vx - v| / (F H^2/(8 nu))); wall time, steps, rhs evaluations.  It fits the
 slope of log(density deviation) against log(delta) per integrator (expected 1, since
@@ -43,7 +43,8 @@ import sys
 
 import numpy as np
 
-import study_common as sc
+from vesph import limits
+from vesph.studies import common as sc
 
 STUDY = "sound_speed"
 COLUMNS = [("series", "integrator", "s"), ("delta", "delta", ".4g"), ("c", "c [m/s]", ".4g"),
@@ -88,7 +89,7 @@ def main(argv=None):
         extra = [f"effects.body_force.acceleration={sc.vec(sc.FORCE, -sc.FORCE)}"] if gravity else []
         for d in deltas:
             c = sc.rule_sound_speed(d, g=g)
-            lim = sc.step_limits(h, c, amax=g)
+            lim = sc.step_limits(h, c, amax=g, vesph=a.vesph)
             run = runner.run(f"{series} delta={d:g}",
                              geo + extra + [sc.sound_speed_rule(d)]
                              + sc.integrator_sets(kind, table, None, rtol), t_end)
@@ -108,7 +109,7 @@ def main(argv=None):
                 "err_analytic": sc.analytic_error(run, t_end) if run.ok else math.nan})
             if run.ok and kind == "arkode":
                 rows[-1]["at_limit"], rows[-1]["dt_over_limit"], rows[-1]["control"] = \
-                    sc.step_control(run)
+                    sc.step_control(run, vesph=a.vesph)
 
     out = runner.out
     sc.write_csv(out / "sound_speed.csv", rows, COLUMNS)
@@ -139,7 +140,8 @@ def main(argv=None):
                            np.log([r["max_density_deviation"] for r in settled]), 1)
             print(f"{series}: max density deviation ~ delta^{p[0]:.3f} over the "
                   f"{len(settled)} runs with H/c < t_end/2")
-    cross = 0.125 * h / (0.125 * h * h / sc.NU)
+    coef = limits.default_coefficients(vesph=a.vesph)
+    cross = coef["cfl"] * h / (coef["viscous"] * h * h / sc.NU)
     d_cross = 8e-7 / cross ** 2
     print(f"the acoustic limit is the smaller one for c > {cross:.4g} m/s, i.e. "
           f"delta < {d_cross:.3g}")

@@ -28,7 +28,7 @@ For every run it measures
 against wall time (summary.json wall_seconds) and rhs evaluations (rhs_evals).  For the
 ARKODE runs it reports the fraction of accepted steps that were as long as the stability
 limit (at_limit; steps equal to min(cfl h/(c+vmax), 0.125 h^2/nu) within 0.1 %), the median
-step / limit, and "control" (study_common.step_control): "limit" (the stability limit sets
+step / limit, and "control" (vesph.studies.common.step_control): "limit" (the stability limit sets
 the step), "held" (the step is constant just below the limit: ARKODE's default fixed-step
 bounds [1, 1.5] do not grow a step by less than 1.5x; vesph sets them to [1, 1] since commit
 ac193f7, so this should no longer occur) or "error" (the error estimate sets the step).
@@ -47,7 +47,7 @@ import argparse
 import math
 import sys
 
-import study_common as sc
+from vesph.studies import common as sc
 
 STUDY = "work_precision"
 COLUMNS = [("series", "series", "s"), ("integrator", "integrator", "s"), ("table", "table", "s"),
@@ -88,7 +88,7 @@ def main(argv=None):
     runner = sc.Runner(a, STUDY)
     geo = sc.geometry(a.ny)
     h = sc.SMOOTHING_RATIO * sc.H / a.ny
-    lim = sc.step_limits(h, sc.rule_sound_speed(0.01))
+    lim = sc.step_limits(h, sc.rule_sound_speed(0.01), vesph=a.vesph)
     print(f"# work-precision: H/{a.ny}, t_end = {t_end} s, stability limit of the fixed-step "
           f"integrators {lim['smallest']:.3g} s ({lim['controls']}); "
           f"OMP_NUM_THREADS={a.threads}", file=sys.stderr)
@@ -127,7 +127,7 @@ def main(argv=None):
             row["err_analytic"] = sc.analytic_error(run, t_end)
             row["err_temporal"] = sc.temporal_error(run, ref, t_end)
             if kind == "arkode":
-                row["at_limit"], row["dt_over_limit"], row["control"] = sc.step_control(run)
+                row["at_limit"], row["dt_over_limit"], row["control"] = sc.step_control(run, vesph=a.vesph)
         rows.append(row)
 
     ref_row = {"series": "reference", "integrator": "arkode-fixed",

@@ -1,0 +1,9 @@
+#!/usr/bin/python3
+"""The documented command `tools/die_swell_lip.py`: runs `python3 -m vesph.measure.die_swell_lip` (vesph/measure/die_swell_lip.py) with the
+same arguments. New command lines can use `tools/vesph-post die_swell_lip` instead."""
+import sys
+
+from vesph.measure import die_swell_lip as tool
+
+if __name__ == "__main__":
+    sys.exit(tool.main())
