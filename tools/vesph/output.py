@@ -1,6 +1,11 @@
-"""Reading vesph-1 output files (docs/user-guide.md §4) for the Python tools: one place for
-opening a file, checking that it is a vesph output and reading the stored scene, so that every
-tool reports a bad file the same way.
+"""Reading vesph-1 output files (docs/user-guide.md §4): the one reader of the tools.
+
+open_h5 and read_header open a file and check that it is a vesph output with its stored
+scene, so that every tool reports a bad file the same way; Output reads the header, the
+frame list, the frames' datasets (each checked against the particle count and dimension) and
+the diagnostics, also of a file a run is still writing (opened without HDF5 locking, a
+half-written last frame skipped with a note). ToolError and run_reporting_errors give the
+tools' 'PROG: error: message' convention.
 """
 import os
 import tomllib
