@@ -1,7 +1,7 @@
 // The `vesph` command (docs/user-guide.md §2 "Command line"):
 //   vesph run SCENE.toml [-o DIR] [--set KEY=VALUE]... [--quiet] [--resume]
 //   vesph check SCENE.toml [--set KEY=VALUE]...
-//   vesph list
+//   vesph list [--json]
 //   vesph bench SCENE.toml [--steps N] [--threads LIST] [--set KEY=VALUE]...
 // Exit codes: 0 finished, 1 other error, 2 invalid input, 3 numerical failure, 130 interrupted.
 #include <omp.h>
@@ -11,12 +11,15 @@
 #include <cstdio>
 #include <fstream>
 #include <iostream>
+#include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "vesph/core/kernel.hpp"
 #include "vesph/io/progress.hpp"
 #include "vesph/physics/registry.hpp"
 #include "vesph/isph/linear_solver.hpp"
+#include "vesph/boundary/registry.hpp"
+#include "vesph/sim/pressure_scheme.hpp"
 #include "vesph/sim/simulation.hpp"
 #include "vesph/time/integrator_factory.hpp"
 
@@ -104,6 +107,20 @@ int benchScene(const std::string& file, const std::vector<std::string>& sets, st
   return 0;
 }
 
+// What `vesph list` names besides the registries, with the summary it prints (a '\n' in a
+// summary continues it on the next line).
+struct Description {
+  const char* name;
+  const char* summary;
+};
+const std::vector<Description>& kernelDescriptions() {
+  static const std::vector<Description> kernels = {
+      {"cubic", "cubic spline, thesis eq. (3.3), support 2h"},
+      {"quintic", "quintic spline, thesis eq. (3.4), support 3h"},
+      {"wendland_c2", "Wendland C2, support 2h"},
+  };
+  return kernels;
+}
 int listAll() {
   std::cout << "effects (scene tables [effects.<name>]):\n";
   for (const auto& e : effectRegistry<2>()) std::printf("  %-20s %s\n", e.name.c_str(), e.summary.c_str());
@@ -114,23 +131,83 @@ int listAll() {
     std::printf("  %-24s order %d, %s, %d stages%s\n", t.name.c_str(), t.order,
                 t.embedding_order ? ("embedding order " + std::to_string(t.embedding_order)).c_str() : "no embedding",
                 t.stages, t.embedding_order ? "" : " (arkode-fixed only)");
-  std::cout << "kernels (particles.kernel):\n"
-            << "  cubic                cubic spline, thesis eq. (3.3), support 2h\n"
-            << "  quintic              quintic spline, thesis eq. (3.4), support 3h\n"
-            << "  wendland_c2          Wendland C2, support 2h\n"
-            << "pressure schemes (solver.scheme):\n"
-            << "  wcsph                weakly compressible: [effects.equation_of_state] gives the pressure\n"
-            << "  isph                 incompressible: projection after every step, pressure Poisson solve (thesis 3.5)\n"
-            << "linear solvers (solver.linear_solver, with scheme = \"isph\"):\n";
+  std::cout << "kernels (particles.kernel):\n";
+  for (const auto& k : kernelDescriptions()) std::printf("  %-20s %s\n", k.name, k.summary);
+  std::cout << "pressure schemes (solver.scheme):\n";
+  for (const auto& s : pressureSchemeRegistry<2>()) std::printf("  %-20s %s\n", s.name.c_str(), s.summary.c_str());
+  std::cout << "linear solvers (solver.linear_solver, with scheme = \"isph\"):\n";
   for (const auto& s : linearSolverRegistry()) std::printf("  %-20s %s\n", s.name.c_str(), s.summary.c_str());
-  std::cout << "boundaries:\n"
-            << "  dummy_walls          [[blocks]] of kind \"wall\": fixed particle layers, no-slip (Adami et al. 2012)\n"
-            << "  image walls          [[blocks]] of kind \"wall\" with treatment = \"image\": boundary + image particles\n"
-            << "                       (Fang et al. 2006 eqs. 46-48; normal, extrapolation = \"fang\" | \"centroid\")\n"
-            << "  inflow               [inflow]: a buffer of fixed particles (kind 3) feeding fluid through an inlet plane;\n"
-            << "                       velocity = \"prescribed\" (profile uniform | parabolic, mean_velocity, ramp_time)\n"
-            << "                       or \"extrapolated\" (follows the fluid, ambient pressure: body-force feeds)\n"
-            << "  outflow              [outflow]: fluid particles past a plane (normal, position) are removed\n";
+  std::cout << "boundaries:\n";
+  for (const auto& b : boundaryRegistry<2>()) std::printf("  %-20s %s\n", b.name.c_str(), b.summary.c_str());
+  return 0;
+}
+
+// `vesph list --json`: what `vesph list` prints, for programs (the Python post-processing in
+// tools/vesph reads the step-limit coefficients and the kernels from here instead of copying
+// them). Kernels come as tables of W(q) and dW/dq at h = 1 (so W(r, h) = W(r/h) / h^D and
+// dW/dr = dW/dq(r/h) / h^(D+1)), sampled at q_i = support * i / kernel_table_intervals, an
+// interval count that puts every knot of the piecewise profiles (q = 1, 2) on a sample, so a
+// cubic Hermite interpolation of the samples is accurate to ~1e-12 relative.
+int listJson() {
+  using nlohmann::json;
+  json out;
+  out["format"] = "vesph-list-1";
+  out["version"] = VESPH_VERSION;
+  json effects = json::array();
+  for (const auto& e : effectRegistry<2>()) effects.push_back({{"name", e.name}, {"summary", e.summary}});
+  out["effects"] = effects;
+  const StepControl defaults;
+  json schemeCfl = json::object();  // each pressure scheme's default CFL coefficient
+  for (const auto& s : pressureSchemeRegistry<2>()) schemeCfl[s.name] = s.make()->defaultCfl();
+  const json step_limits = {
+      {"cfl", schemeCfl},
+      {"viscous_coefficient", defaults.viscous_coefficient},
+      {"force_coefficient", defaults.force_coefficient},
+      {"relaxation_coefficient", defaults.relaxation_coefficient},
+      {"formulas",
+       {{"acoustic", "cfl * h / (c + c_e + v_max)"},
+        {"viscous", "viscous_coefficient * h^2 / nu"},
+        {"force", "force_coefficient * sqrt(h / a_max)"},
+        {"relaxation", "relaxation_coefficient * lambda"}}}};
+  json integrators = json::array();
+  for (const auto& e : integratorRegistry())
+    integrators.push_back({{"name", e.name}, {"summary", e.summary}, {"default_step_limits", step_limits}});
+  out["integrators"] = integrators;
+  out["step_limits"] = step_limits;
+  json tables = json::array();
+  for (const auto& t : erkTables())
+    tables.push_back({{"name", t.name}, {"order", t.order}, {"embedding_order", t.embedding_order}, {"stages", t.stages}});
+  out["butcher_tables"] = tables;
+  constexpr int kernel_table_intervals = 1200;
+  json kernels = json::array();
+  for (const auto& k : kernelDescriptions()) {
+    json entry = {{"name", k.name}, {"summary", k.summary}, {"table_intervals", kernel_table_intervals}};
+    json samples;
+    for (int dim = 2; dim <= 3; ++dim) {
+      const Kernel kernel(kernelFromName(k.name), dim, 1.0);
+      entry["support"] = kernel.support_q;
+      std::vector<double> w(kernel_table_intervals + 1), dw(kernel_table_intervals + 1);
+      for (int i = 0; i <= kernel_table_intervals; ++i) {
+        const double q = kernel.support_q * i / kernel_table_intervals;
+        w[i] = kernel.W(q);
+        dw[i] = kernel.dWdr(q);
+      }
+      samples[std::to_string(dim)] = {{"sigma", kernel.w_scale}, {"W", w}, {"dW_dq", dw}};
+    }
+    entry["samples"] = samples;
+    kernels.push_back(entry);
+  }
+  out["kernels"] = kernels;
+  json schemes = json::array();
+  for (const auto& s : pressureSchemeRegistry<2>()) schemes.push_back({{"name", s.name}, {"summary", s.summary}});
+  out["pressure_schemes"] = schemes;
+  json solvers = json::array();
+  for (const auto& s : linearSolverRegistry()) solvers.push_back({{"name", s.name}, {"summary", s.summary}});
+  out["linear_solvers"] = solvers;
+  json boundaries = json::array();
+  for (const auto& b : boundaryRegistry<2>()) boundaries.push_back({{"name", b.name}, {"summary", b.summary}});
+  out["boundaries"] = boundaries;
+  std::cout << out.dump() << "\n";
   return 0;
 }
 
@@ -160,7 +237,10 @@ int main(int argc, char** argv) {
   check->add_option("scene", scene, "scene file (TOML)")->required();
   check->add_option("--set", sets, "override a scene key (repeatable)");
 
-  app.add_subcommand("list", "list effects, integrators, kernels and boundaries");
+  bool list_json = false;
+  auto* list = app.add_subcommand("list", "list effects, integrators, kernels and boundaries");
+  list->add_flag("--json", list_json,
+                 "print them as JSON, with the default step-limit coefficients and the kernels as tables of W(q), dW/dq");
 
   auto* bench = app.add_subcommand("bench", "run a scene for a fixed number of steps and print throughput");
   bench->add_option("scene", scene, "scene file (TOML)")->required();
@@ -178,7 +258,7 @@ int main(int argc, char** argv) {
   }
 
   try {
-    if (app.got_subcommand("list")) return listAll();
+    if (app.got_subcommand("list")) return list_json ? listJson() : listAll();
     SceneHeader h;
     if (app.got_subcommand("bench")) {
       if (threads.empty()) threads = {1, omp_get_num_procs()};

@@ -6,8 +6,8 @@ namespace vesph {
 // The order is the build order: the inflow buffer appends fixed particles that the walls then
 // cover (as dummy layers), and its hook runs before the domain exit's.
 #define VESPH_BOUNDARIES(X)                                                                         \
-  X(inflow_outflow, buildInflowOutflow, "inflow buffer and outflow plane ([inflow], [outflow])")   \
-  X(dummy_walls, buildDummyWalls, "wall particles: dummy layers or boundary + image particles ([[blocks]] kind = \"wall\")") \
+  X(inflow_outflow, buildInflowOutflow, "[inflow]: a buffer of fixed particles (kind 3) feeding fluid through an inlet plane, velocity = \"prescribed\" or \"extrapolated\"; [outflow]: fluid particles past a plane are removed")   \
+  X(dummy_walls, buildDummyWalls, "wall particles ([[blocks]] kind = \"wall\"), no-slip: dummy layers (Adami et al. 2012), or with treatment = \"image\" boundary + image particles (Fang et al. 2006 eqs. 46-48)") \
   X(domain_exit, buildDomainExit, "removal of fluid particles that leave the domain (checks.leave_domain = \"remove\")")
 
 #define VESPH_DECLARE(NAME, FN, SUMMARY) \

@@ -28,7 +28,7 @@ class IsphScheme final : public PressureScheme<D> {
   }
   // Thesis §3.5: without acoustic waves the CFL limit on the flow speed allows a larger
   // coefficient.
-  double defaultCfl() const override { return 0.175; }
+  double defaultCfl() const override { return kIsphDefaultCfl; }
   // No sound speed (an equation of state is refused with this scheme): the flow's speed scale.
   double defaultSpeedGuard(const SphSystem<D>& system, double velocity_scale) const override {
     return flowSpeedGuard(system, velocity_scale);

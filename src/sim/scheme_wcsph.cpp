@@ -15,7 +15,7 @@ class WcsphScheme final : public PressureScheme<D> {
         scene.solver.fail(key, "no " + key + " with scheme = \"wcsph\" (the linear-solver keys belong to scheme = \"isph\")");
   }
   // Fang et al. eq. (51) with the thesis' coefficient.
-  double defaultCfl() const override { return 0.125; }
+  double defaultCfl() const override { return kWcsphDefaultCfl; }
   // The sound speed; without a pressure model (a scene without an equation of state) the
   // flow's speed scale.
   double defaultSpeedGuard(const SphSystem<D>& system, double velocity_scale) const override {

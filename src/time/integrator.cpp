@@ -38,7 +38,7 @@ std::unique_ptr<Integrator> makeIntegrator(ConfigTable& cfg, const ReferenceScal
   std::vector<std::string> names;
   for (const auto& e : integratorRegistry()) names.push_back(e.name);
   const std::string type = cfg.choice("type", "leapfrog", names);
-  StepControl c;
+  StepControl c;  // its members hold the defaults (also printed by `vesph list --json`)
   // The fixed-step integrators take the limits as their step, so the coefficients stay in
   // their explicit stability range. For the adaptive 'arkode' the limits only cap a step that
   // the error control chooses (and rejects when it is unstable); a cap above the fixed-step
@@ -46,9 +46,9 @@ std::unique_ptr<Integrator> makeIntegrator(ConfigTable& cfg, const ReferenceScal
   // impact the acoustic cap, not the error, bounded DP5's step).
   const double cap_range = type == "arkode" ? 10.0 : 1.0;
   c.cfl = cfg.numberIn("cfl", default_cfl, 1e-6, cap_range);
-  c.viscous_coefficient = cfg.numberIn("viscous_coefficient", 0.125, 1e-6, cap_range);
-  c.force_coefficient = cfg.numberIn("force_coefficient", 0.25, 1e-6, 1.0);
-  c.relaxation_coefficient = cfg.numberIn("relaxation_coefficient", 0.5, 1e-6, 2.0);
+  c.viscous_coefficient = cfg.numberIn("viscous_coefficient", c.viscous_coefficient, 1e-6, cap_range);
+  c.force_coefficient = cfg.numberIn("force_coefficient", c.force_coefficient, 1e-6, 1.0);
+  c.relaxation_coefficient = cfg.numberIn("relaxation_coefficient", c.relaxation_coefficient, 1e-6, 2.0);
   c.max_step = cfg.optionalNumber("max_step", Bound::positive, "s").value_or(c.max_step);
   c.fixed_step = cfg.optionalNumber("step", Bound::positive, "s").value_or(0.0);
   if (c.fixed_step > 0 && type == "arkode")

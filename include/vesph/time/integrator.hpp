@@ -41,8 +41,13 @@ struct StabilitySnapshot {
 // fixed_step (integrator.step), when set, makes the fixed-step integrators take exactly that
 // step (shortened only to land on output times) instead of the stability limit: for temporal
 // convergence studies; the limits are not applied then.
+// The default CFL coefficient of each pressure scheme (thesis §3.5): WCSPH's is StepControl's
+// cfl; the incompressible scheme's projection allows a larger step.
+inline constexpr double kWcsphDefaultCfl = 0.125;
+inline constexpr double kIsphDefaultCfl = 0.175;
+
 struct StepControl {
-  double cfl = 0.125;
+  double cfl = kWcsphDefaultCfl;
   double viscous_coefficient = 0.125;
   double force_coefficient = 0.25;
   double relaxation_coefficient = 0.5;

@@ -19,6 +19,6 @@ const std::vector<IntegratorEntry>& integratorRegistry();
 
 // Reads [integrator] (type and the step-control keys) and builds the integrator. default_cfl:
 // the CFL coefficient when the scene gives none (WCSPH 0.125; ISPH 0.175, thesis §3.5).
-std::unique_ptr<Integrator> makeIntegrator(ConfigTable& cfg, const ReferenceScales& scales, double default_cfl = 0.125);
+std::unique_ptr<Integrator> makeIntegrator(ConfigTable& cfg, const ReferenceScales& scales, double default_cfl = kWcsphDefaultCfl);
 
 }  // namespace vesph

@@ -1,11 +1,10 @@
-#!/usr/bin/python3
-"""Shared helpers for the vesph parameter studies (tools/study_*.py).
+"""Shared helpers for the vesph parameter studies (vesph.studies).
 
 Not a command: imported by
-    tools/study_work_precision.py   accuracy against cost, per integrator
-    tools/study_cfl.py              step-limit coefficients up to instability
-    tools/study_sound_speed.py      the density-variation parameter delta
-    tools/study_convergence.py      spatial and temporal orders
+    vesph.studies.work_precision   accuracy against cost, per integrator  (tools/study_work_precision.py)
+    vesph.studies.cfl              step-limit coefficients up to instability  (tools/study_cfl.py)
+    vesph.studies.sound_speed      the density-variation parameter delta  (tools/study_sound_speed.py)
+    vesph.studies.convergence      spatial and temporal orders  (tools/study_convergence.py)
 
 Every study runs the plane-Poiseuille start-up case (cases/poiseuille_newtonian.toml,
 theory.md section 10) with `--set` overrides, one `vesph run` at a time, each in its own
@@ -22,12 +21,13 @@ What this module provides
 * Runner: runs vesph (exit 0 -> "ok", exit 3 -> "unstable", anything else -> "failed",
   which makes the study exit non-zero), logs every command line to DIR/commands.txt.
 * analytic_error(run, t): max over fluid particles |vx - v(y,t)| / (F H^2/(8 nu)) with
-  v from tools/poiseuille_check.py (analytic_velocity), F, nu, H from the resolved scene.
+  v from vesph.analytic.analytic_velocity, F, nu, H from the resolved scene.
 * temporal_error(run, ref, t): max over fluid particles, matched by id, of
   |vx - vx_ref| / (F H^2/(8 nu)).
 * step_limits(...), step_control(run): the explicit stability limits of theory.md
-  section 8, and how an adaptive run's steps relate to them (at the limit, held at a
-  constant step just below it, or set by the error estimate); the step sizes are the
+  section 8 with vesph's default coefficients (vesph.limits, from `vesph list --json`), and
+  how an adaptive run's steps relate to them (at the limit, held at a constant step just
+  below it, or set by the error estimate); the step sizes are the
   differences of the diagnostics `time` column.
 * write_csv, print_table, plot helpers.
 
@@ -45,19 +45,18 @@ import subprocess
 import sys
 import tempfile
 import time
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-TOOLS = Path(__file__).resolve().parent
-REPO = TOOLS.parent
-if str(TOOLS) not in sys.path:
-    sys.path.insert(0, str(TOOLS))
+from vesph import REPO as _REPO
+from vesph import limits
+from vesph.analytic import analytic_velocity
+from vesph.checks.poiseuille import scene_parameters
+from vesph.output import Output
 
-from poiseuille_check import _as_str, analytic_velocity, scene_parameters  # noqa: E402
-
+REPO = Path(_REPO)
 DEFAULT_VESPH = REPO / "build-dev" / "vesph"
 DEFAULT_SCENE = REPO / "cases" / "poiseuille_newtonian.toml"
 
@@ -131,14 +130,11 @@ def integrator_label(kind, table=None):
 
 # --------------------------------------------------------------------------- limits
 
-def step_limits(h, c, nu=NU, vmax=0.0, amax=FORCE, cfl=0.125, viscous=0.125, force=0.25):
-    """The stability limits of theory.md section 8, s."""
-    out = {"acoustic": cfl * h / (c + vmax) if c + vmax > 0 else math.inf,
-           "viscous": viscous * h * h / nu if nu > 0 else math.inf,
-           "force": force * math.sqrt(h / amax) if amax > 0 else math.inf}
-    out["smallest"] = min(out.values())
-    out["controls"] = min(("acoustic", "viscous", "force"), key=lambda k: out[k])
-    return out
+def step_limits(h, c, nu=NU, vmax=0.0, amax=FORCE, cfl=None, viscous=None, force=None, vesph=None):
+    """The stability limits of theory.md section 8, s (vesph.limits.step_limits with this
+    case's nu and body force); a coefficient not given is vesph's default."""
+    return limits.step_limits(h, c, nu, vmax=vmax, amax=amax, cfl=cfl, viscous=viscous,
+                              force=force, vesph=vesph)
 
 
 # --------------------------------------------------------------------------- runs
@@ -225,8 +221,6 @@ class Run:
 
 def read_output(run, directory):
     """Fill run.summary, run.scene, run.frames and the diagnostics from directory."""
-    import h5py
-
     sj = Path(directory) / "summary.json"
     if sj.exists():
         run.summary = json.loads(sj.read_text())
@@ -237,23 +231,20 @@ def read_output(run, directory):
         h5path = cands[0] if cands else None
     if h5path is None:
         return
-    with h5py.File(h5path, "r") as f:
-        run.scene = tomllib.loads(_as_str(f.attrs["scene"]))
-        run.dx = float(f.attrs["dx"])
-        run.h = float(f.attrs["h"])
-        for name in sorted(f["frames"].keys()):
-            g = f["frames"][name]
-            kind = g["kind"][...]
-            fl = kind == 0
-            ids = g["id"][...][fl]
+    with Output(str(h5path)) as out:
+        run.scene = out.scene
+        run.dx = float(out.f.attrs["dx"])
+        run.h = float(out.f.attrs["h"])
+        for k, (_, t) in enumerate(out.frames):
+            g = out.read(k, ("kind", "id", "position", "velocity", "density"))
+            fl = g["kind"] == 0
+            ids = g["id"][fl]
             order = np.argsort(ids, kind="stable")
             run.frames.append(FluidFrame(
-                time=float(g.attrs["time"]), ids=ids[order],
-                y=g["position"][...][fl, 1][order], vx=g["velocity"][...][fl, 0][order],
-                rho=g["density"][...][fl][order]))
-        if "diagnostics" in f:
-            run.diag_time = f["diagnostics/time"][...]
-            run.diag_max_speed = f["diagnostics/max_speed"][...]
+                time=t, ids=ids[order], y=g["position"][fl, 1][order],
+                vx=g["velocity"][fl, 0][order], rho=g["density"][fl][order]))
+        if "diagnostics" in out.f:
+            run.diag_time, run.diag_max_speed = out.diagnostics("time", "max_speed")
 
 
 class Runner:
@@ -389,7 +380,7 @@ def density_deviation_at(run, t):
     return float(np.max(np.abs(fr.rho - rho0))) / rho0
 
 
-def step_control(run, cfl=0.125, viscous=0.125, rtol=1e-3):
+def step_control(run, cfl=None, viscous=None, rtol=1e-3, vesph=None):
     """How the accepted steps of an (adaptive) run relate to the stability limit
     min(cfl h/(c + v_max), viscous h^2/nu) of each step.  Returns
     (at_limit, ratio, control):
@@ -403,12 +394,16 @@ def step_control(run, cfl=0.125, viscous=0.125, rtol=1e-3):
                          although the error estimate would allow the limit.  vesph sets the
                          bounds to [1, 1] since commit ac193f7: "held" now flags a regression;
                 "error"  otherwise (the error estimate sets the step).
-    The first and the last step (start-up, landing on the end time) are not counted."""
+    The first and the last step (start-up, landing on the end time) are not counted; a
+    coefficient not given is vesph's default (vesph.limits)."""
     dts = run.step_sizes()
     if len(dts) < 4 or not math.isfinite(run.h):
         return math.nan, math.nan, ""
     c = run.sound_speed if math.isfinite(run.sound_speed) else 0.0
     nu = velocity_scale(run)[2]
+    defaults = limits.default_coefficients(vesph=vesph)
+    cfl = defaults["cfl"] if cfl is None else cfl
+    viscous = defaults["viscous"] if viscous is None else viscous
     vprev = np.concatenate([[0.0], run.diag_max_speed[:-1]])
     acoustic = cfl * run.h / (c + vprev) if c > 0 else np.full(len(dts), np.inf)
     lim = np.minimum(acoustic, viscous * run.h ** 2 / nu)

@@ -1,0 +1,139 @@
+#!/usr/bin/python3
+"""Benchmark of the ISPH projection (issue 6): time per projection (assembly and solve
+separately) and per step, and BiCGSTAB iterations, for a hydrostatic tank of N x N fluid
+particles, for each linear solver. Prints a table (and --csv FILE); timings are measured,
+never asserted: run it on a quiet machine and compare ratios from one run.
+
+Usage
+-----
+    /usr/bin/python3 tools/isph_bench.py [--vesph build/vesph] [--sizes 100,200,400]
+        [--steps 5] [--solvers umfpack,klu,bicgstab+diagonal,bicgstab+ilut] [--threads 1]
+
+The scene is cases/hydrostatic_tank_isph.toml scaled: N particles across the 0.1 m depth and
+width (dx = 0.1/N), walls 5 layers thick, a fixed step of 1e-3 s (the solve does not depend on
+it), water viscosity so that the step stays below the stability limits at every size; the
+figures are the means over the steps (the first step's symbolic analysis included).
+"""
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+
+from vesph.catalogue import DEFAULT_VESPH
+from vesph.output import Output
+
+SCENE = """name = "isph_bench"
+dimension = 2
+[domain]
+min = [{lo}, {lo}]
+max = [{hi}, {top}]
+[particles]
+spacing = {dx}
+kernel = "quintic"
+smoothing_ratio = 1.6
+[fluid]
+density = 1000.0
+viscosity = 1.0e-3
+[[blocks]]
+kind = "fluid"
+min = [0.0, 0.0]
+max = [0.1, 0.1]
+[[blocks]]
+kind = "wall"
+min = [{lo}, {lo}]
+max = [{hi}, 0.0]
+[[blocks]]
+kind = "wall"
+min = [{lo}, 0.0]
+max = [0.0, {top}]
+[[blocks]]
+kind = "wall"
+min = [0.1, 0.0]
+max = [{hi}, {top}]
+[solver]
+scheme = "isph"
+{solver}
+[effects.pressure_gradient]
+form = "renormalised"
+[effects.viscosity]
+[effects.body_force]
+acceleration = [0.0, -9.81]
+[effects.free_surface]
+threshold = 0.97
+[integrator]
+type = "leapfrog"
+step = 1e-3
+[time]
+end = {end}
+"""
+
+
+def solver_keys(name):
+    if name.startswith("bicgstab"):
+        pc = name.split("+")[1] if "+" in name else "ilut"
+        return f'linear_solver = "bicgstab"\npreconditioner = "{pc}"\ntolerance = 1e-8\nmax_iterations = 10000'
+    return f'linear_solver = "{name}"'
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(prog="isph_bench.py", description=__doc__.split("\n\n")[0])
+    ap.add_argument("--vesph", default=DEFAULT_VESPH)
+    ap.add_argument("--sizes", default="100,200,400", help="particles across the tank (N: N^2 fluid particles)")
+    ap.add_argument("--steps", type=int, default=5)
+    ap.add_argument("--solvers", default="umfpack,klu,bicgstab+diagonal,bicgstab+ilut")
+    ap.add_argument("--threads", type=int, default=1)
+    ap.add_argument("--direct-up-to", type=int, default=200, metavar="N",
+                    help="run the direct solvers only up to N particles across (default 200: at 400 a "
+                         "UMFPACK solve takes minutes)")
+    ap.add_argument("--csv", metavar="FILE")
+    a = ap.parse_args(argv)
+    if not os.path.exists(a.vesph):
+        ap.error(f"{a.vesph}: no such file (build vesph first, or give --vesph)")
+    env = dict(os.environ, OMP_NUM_THREADS=str(a.threads))
+    rows = []
+    print(f"{'N_fluid':>8} {'solver':>18} {'unknowns':>9} {'assembly_s':>11} {'solve_s':>10} {'projection_s':>13} "
+          f"{'step_s':>9} {'iterations':>10}")
+    with tempfile.TemporaryDirectory() as work:
+        for n in (int(s) for s in a.sizes.split(",")):
+            dx = 0.1 / n
+            lo, hi, top = -5 * dx, 0.1 + 5 * dx, 0.1 + 8 * dx
+            for solver in a.solvers.split(","):
+                if not solver.startswith("bicgstab") and n > a.direct_up_to:
+                    print(f"{n*n:8d} {solver:>18} skipped (--direct-up-to {a.direct_up_to})")
+                    continue
+                scene = os.path.join(work, "bench.toml")
+                with open(scene, "w") as f:
+                    f.write(SCENE.format(lo=repr(lo), hi=repr(hi), top=repr(top), dx=repr(dx),
+                                         solver=solver_keys(solver), end=repr(a.steps * 1e-3)))
+                out = os.path.join(work, "out")
+                r = subprocess.run([a.vesph, "run", scene, "-o", out, "--quiet"], env=env,
+                                   capture_output=True, text=True)
+                if r.returncode != 0:
+                    print(f"{n*n:8d} {solver:>18} failed (exit {r.returncode}): {r.stderr.strip()[-300:]}")
+                    continue
+                with open(os.path.join(out, "summary.json")) as f:
+                    s = json.load(f)
+                i = s["isph"]
+                k = max(i["solves"], 1)
+                with Output(os.path.join(out, "isph_bench.h5")) as h:
+                    unknowns = int(h.diagnostics("pressure_unknowns")[0][-1])
+                row = (n * n, solver, unknowns, i["assembly_seconds"] / k, i["solve_seconds"] / k,
+                       (i["assembly_seconds"] + i["solve_seconds"] + i["correction_seconds"]) / k,
+                       s["wall_seconds"] / max(s["steps"], 1), i["iterations_mean"])
+                rows.append(row)
+                print(f"{row[0]:8d} {row[1]:>18} {row[2]:9d} {row[3]:11.4f} {row[4]:10.4f} {row[5]:13.4f} "
+                      f"{row[6]:9.4f} {row[7]:10.1f}")
+                sys.stdout.flush()
+    print(f"# means over {a.steps} steps, {a.threads} thread(s); BiCGSTAB tolerance 1e-8 (relative residual)")
+    if a.csv:
+        with open(a.csv, "w") as f:
+            f.write("fluid_particles,solver,unknowns,assembly_s,solve_s,projection_s,step_s,iterations\n")
+            for r in rows:
+                f.write(",".join(str(x) for x in r) + "\n")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
