@@ -7,3 +7,15 @@ sh tools/install-deps.sh
 cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
 cmake --build build
 ctest --test-dir build --output-on-failure -j 2
+
+# Sanitizer build (address + undefined behaviour, CMake option VESPH_SANITIZE) in build-asan: every
+# unit test, the fuzz targets for the scene parser and the checkpoint reader among them
+# (tests/test_robustness.cpp), and the short command-line tests; the validation runs are left to
+# the Release suite above. A report fails the step (ASan aborts; -fno-sanitize-recover=undefined).
+cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=Release -DVESPH_SANITIZE=ON >/dev/null
+cmake --build build-asan
+# Left out: "isph projection: a tank at rest under gravity, ..." compares two divergence norms at
+# round-off (divergenceAfter <= divergenceBefore); at -O1 the order of the sums differs and the
+# comparison fails by round-off with no sanitizer report (it passes in the Release build).
+ctest --test-dir build-asan --output-on-failure -j 2 -E '^(cli|tools)[.]|^isph projection: a tank at rest under gravity'
+ctest --test-dir build-asan --output-on-failure -R '^cli[.](scene_errors|check_and_list|robustness)$'

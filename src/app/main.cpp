@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <fstream>
 #include <iostream>
+#include <new>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
@@ -275,6 +276,10 @@ int main(int argc, char** argv) {
   } catch (const NumericalFailure& e) {
     std::cerr << "vesph: numerical failure: " << e.what() << "\n";
     return 3;
+  } catch (const std::bad_alloc&) {
+    // Allocations the scene asks for are estimated before they are made; this is what is left.
+    std::cerr << "vesph: error: out of memory while handling " << scene << "\n";
+    return 1;
   } catch (const std::exception& e) {
     std::cerr << "vesph: error: " << e.what() << "\n";
     return 1;

@@ -69,8 +69,44 @@ bool NeighbourList<D>::update(const ParticleSet<D>& p, bool force) {
 template <int D>
 void NeighbourList<D>::build(const ParticleSet<D>& p) {
   const std::size_t N = p.size(), nm = p.n_moving;
+
+  // The block of grid cells the particles occupy (non-finite positions are reported below).
+  std::array<int, D> cmin, cmax;
+  for (int a = 0; a < D; ++a) {
+    cmin[a] = domain_.periodic[a] ? 0 : ncell_[a] - 1;
+    cmax[a] = domain_.periodic[a] ? ncell_[a] - 1 : 0;
+  }
+  if (N == 0) cmin = cmax;
+  for (int a = 0; a < D; ++a) {
+    if (domain_.periodic[a]) continue;
+    int lo = cmin[a], hi = cmax[a];
+#pragma omp parallel for schedule(static) if (N >= kParallelMinimum) reduction(min : lo) reduction(max : hi)
+    for (std::size_t i = 0; i < N; ++i) {
+      const double x = p.position[D * i + a];
+      if (!std::isfinite(x)) continue;
+      const int c = cellCoord(a, x);
+      lo = std::min(lo, c);
+      hi = std::max(hi, c);
+    }
+    cmin[a] = lo;
+    cmax[a] = std::max(lo, hi);
+  }
   std::size_t ncells = 1;
-  for (int a = 0; a < D; ++a) ncells *= static_cast<std::size_t>(ncell_[a]);
+  for (int a = 0; a < D; ++a) {
+    block_lo_[a] = cmin[a];
+    block_n_[a] = cmax[a] - cmin[a] + 1;
+    ncells *= static_cast<std::size_t>(block_n_[a]);
+  }
+  // Cells are 8 bytes each; a block far larger than the particle count (particles scattered over
+  // a huge domain) is refused with its size rather than ending in std::bad_alloc.
+  const std::size_t max_cells = std::max<std::size_t>(std::size_t{1} << 24, 64 * N);
+  if (ncells > max_cells) {
+    std::ostringstream os;
+    os << "the neighbour search's cell grid over the particles' extent would need " << ncells << " cells ("
+       << static_cast<double>(ncells) * 8 / (1 << 30) << " GiB) for " << N
+       << " particles: the particles are spread over a region far larger than the kernel support";
+    throw NumericalFailure(os.str());
+  }
 
   // Bin particles: cell of each particle in parallel, then a counting sort, stable in
   // particle index.
@@ -83,7 +119,7 @@ void NeighbourList<D>::build(const ParticleSet<D>& p) {
     for (int a = D - 1; a >= 0; --a) {
       const double x = p.position[D * i + a];
       if (!std::isfinite(x)) bad = std::max(bad, static_cast<long>(i));
-      c = c * ncell_[a] + (std::isfinite(x) ? cellCoord(a, x) : 0);
+      c = c * block_n_[a] + (std::isfinite(x) ? cellCoord(a, x) - block_lo_[a] : 0);
     }
     cell_of_[i] = static_cast<Index>(c);
   }
@@ -102,8 +138,8 @@ void NeighbourList<D>::build(const ParticleSet<D>& p) {
     std::array<int, D> ci;
     std::size_t c = cell_of_[i];
     for (int a = 0; a < D; ++a) {
-      ci[a] = static_cast<int>(c % ncell_[a]);
-      c /= ncell_[a];
+      ci[a] = static_cast<int>(c % block_n_[a]) + block_lo_[a];
+      c /= block_n_[a];
     }
     const double* xi = &p.position[D * i];
     forCellsAround(ci, [&](std::size_t cell) {

@@ -1,10 +1,139 @@
 #include "vesph/io/config.hpp"
 
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 
 namespace vesph {
+
+std::string clipForMessage(const std::string& text, std::size_t max_chars) {
+  if (text.size() <= max_chars) return text;
+  std::size_t cut = max_chars;
+  // Do not split a UTF-8 sequence: back off over continuation bytes (10xxxxxx).
+  while (cut > 0 && (static_cast<unsigned char>(text[cut]) & 0xC0) == 0x80) --cut;
+  return text.substr(0, cut) + "\u2026 (" + std::to_string(text.size()) + " characters)";
+}
+
+namespace {
+
+bool isBareKeyChar(char c) {
+  return (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_' || c == '-';
+}
+
+// Advances i past the string starting at text[i] (a quote); counts the newlines of multi-line
+// strings into line. An unterminated string ends at the end of its line (the parser reports it).
+void skipTomlString(const std::string& text, std::size_t& i, std::size_t& line) {
+  const char q = text[i];
+  const std::size_t n = text.size();
+  if (text.compare(i, 3, std::string(3, q)) == 0) {
+    for (i += 3; i < n; ++i) {
+      if (text[i] == '\\' && q == '"') {
+        ++i;
+        if (i < n && text[i] == '\n') ++line;
+        continue;
+      }
+      if (text[i] == '\n') ++line;
+      if (text.compare(i, 3, std::string(3, q)) == 0) {
+        i += 3;
+        while (i < n && text[i] == q) ++i;  // up to two quotes may close the content
+        return;
+      }
+    }
+    return;
+  }
+  for (++i; i < n && text[i] != '\n'; ++i) {
+    if (text[i] == '\\' && q == '"') {
+      if (i + 1 < n && text[i + 1] != '\n') ++i;
+      continue;
+    }
+    if (text[i] == q) {
+      ++i;
+      return;
+    }
+  }
+}
+
+}  // namespace
+
+void checkSceneText(const std::string& text, const std::string& label) {
+  if (text.size() > kMaxSceneBytes)
+    throw InputError(label + ": " + std::to_string(text.size()) + " bytes, larger than the " +
+                     std::to_string(kMaxSceneBytes >> 20) + " MiB a scene file may have");
+  // A lexical pass (strings and comments skipped) over the keys and brackets: the TOML library
+  // recurses once per key part and per nested array or inline table, so absurd nesting would
+  // overflow the stack inside it; no scene needs more than a few levels (docs/user-guide.md §3).
+  std::vector<char> open;  // '[' or '{' opened in values
+  bool key_expected = true;
+  std::size_t line = 1, i = 0, header_parts = 0;
+  const std::size_t n = text.size();
+  while (i < n) {
+    const char c = text[i];
+    if (c == '\n') {
+      ++line;
+      ++i;
+      if (open.empty()) key_expected = true;
+      continue;
+    }
+    if (c == ' ' || c == '\t' || c == '\r') {
+      ++i;
+      continue;
+    }
+    if (c == '#') {
+      while (i < n && text[i] != '\n') ++i;
+      continue;
+    }
+    if (key_expected) {
+      const bool header = open.empty() && c == '[';
+      if (header) i += text.compare(i, 2, "[[") == 0 ? 2 : 1;
+      std::size_t parts = 0;
+      while (i < n) {
+        const char d = text[i];
+        if (d == ' ' || d == '\t' || d == '.') {
+          ++i;
+        } else if (d == '"' || d == '\'') {
+          skipTomlString(text, i, line);
+          ++parts;
+        } else if (isBareKeyChar(d)) {
+          while (i < n && isBareKeyChar(text[i])) ++i;
+          ++parts;
+        } else {
+          break;
+        }
+      }
+      // Counted as the resolved scene will write the key again: a header's parts and the
+      // dotted key below it as one header path, a dotted key in an inline table as nested
+      // inline tables (so that every accepted scene's resolved text is accepted as well).
+      if (header) header_parts = parts;
+      const std::size_t path = header ? parts : open.empty() ? header_parts + parts : parts;
+      if (path > kMaxKeyParts)
+        throw InputError(label + ": a key of " + std::to_string(path) + " dotted parts (line " + std::to_string(line) +
+                         "); scene keys have at most " + std::to_string(kMaxKeyParts));
+      if (!open.empty() && parts > 0 && open.size() + parts - 1 > kMaxValueNesting)
+        throw InputError(label + ": arrays or inline tables nested more than " + std::to_string(kMaxValueNesting) +
+                         " deep (line " + std::to_string(line) + ")");
+      key_expected = false;
+      continue;
+    }
+    if (c == '"' || c == '\'') {
+      skipTomlString(text, i, line);
+      continue;
+    }
+    if (c == '[' || c == '{') {
+      open.push_back(c);
+      if (open.size() > kMaxValueNesting)
+        throw InputError(label + ": arrays or inline tables nested more than " + std::to_string(kMaxValueNesting) +
+                         " deep (line " + std::to_string(line) + ")");
+      key_expected = c == '{';
+    } else if (c == ']' || c == '}') {
+      if (!open.empty()) open.pop_back();
+    } else if (c == ',') {
+      key_expected = !open.empty() && open.back() == '{';
+    }
+    ++i;
+  }
+}
+
 namespace {
 
 std::string describe(const toml::node* n) {
@@ -17,7 +146,7 @@ std::string describe(const toml::node* n) {
   else if (n->is_integer()) os << n->as_integer()->get();
   else if (n->is_floating_point()) os << n->as_floating_point()->get();
   else os << "a value of another type";
-  return os.str();
+  return clipForMessage(os.str());
 }
 
 std::string lineOf(const toml::node* n) {
@@ -38,8 +167,11 @@ std::string join(const std::vector<std::string>& v) {
   return s;
 }
 
-// Splits "a.b[2].c" into segments; an index segment is "[2]".
-std::vector<std::string> splitPath(const std::string& p) {
+// Splits the key of a --set, "a.b[2].c", into segments; an index segment is "[2]". Anything
+// else in brackets ("[abc]", "[]", "[[0]]", an index beyond any array) is refused, naming the
+// assignment (shown as `shown`).
+std::vector<std::string> splitPath(const std::string& p, const std::string& shown) {
+  auto refuse = [&](const std::string& why) { throw InputError("--set '" + shown + "': " + why); };
   std::vector<std::string> out;
   std::string cur;
   for (std::size_t k = 0; k < p.size(); ++k) {
@@ -49,16 +181,24 @@ std::vector<std::string> splitPath(const std::string& p) {
       cur.clear();
     } else if (c == '[') {
       if (!cur.empty()) out.push_back(cur);
-      cur = "[";
-    } else if (c == ']') {
-      cur += ']';
-      out.push_back(cur);
       cur.clear();
+      const std::size_t close = p.find(']', k + 1);
+      const std::string digits = close == std::string::npos ? p.substr(k + 1) : p.substr(k + 1, close - k - 1);
+      if (close == std::string::npos || digits.empty() || digits.size() > 9 ||
+          digits.find_first_not_of("0123456789") != std::string::npos)
+        refuse("'[" + clipForMessage(digits, 20) +
+               (close == std::string::npos ? "" : "]") + "' is not an array index (expected [N], N = 0, 1, ...)");
+      out.push_back("[" + digits + "]");
+      k = close;
+    } else if (c == ']') {
+      refuse("a ']' without its '['");
     } else {
       cur += c;
     }
+    if (out.size() > kMaxKeyParts) refuse("more than " + std::to_string(kMaxKeyParts) + " key parts");
   }
   if (!cur.empty()) out.push_back(cur);
+  if (out.size() > kMaxKeyParts) refuse("more than " + std::to_string(kMaxKeyParts) + " key parts");
   return out;
 }
 
@@ -68,6 +208,7 @@ Config Config::fromString(const std::string& text, const std::string& label,
                           const std::vector<std::string>& overrides) {
   Config c;
   c.file_ = label;
+  checkSceneText(text, label);
   try {
     c.table_ = toml::parse(text, label);
   } catch (const toml::parse_error& e) {
@@ -81,39 +222,54 @@ Config Config::fromString(const std::string& text, const std::string& label,
 }
 
 Config Config::fromFile(const std::string& file, const std::vector<std::string>& overrides) {
-  std::ifstream in(file);
+  // Special files are named as such before anything is read: a directory opens as an empty
+  // stream, and /dev/zero never ends.
+  std::error_code ec;
+  const auto status = std::filesystem::status(file, ec);
+  if (std::filesystem::is_directory(status)) throw InputError(file + ": is a directory, not a scene file");
+  if (std::filesystem::is_character_file(status) || std::filesystem::is_block_file(status))
+    throw InputError(file + ": is a device, not a scene file");
+  std::ifstream in(file, std::ios::binary);
   if (!in) throw InputError(file + ": cannot open the scene file");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return fromString(ss.str(), file, overrides);
+  // Read at most one byte more than a scene may have (pipes have no size to ask for).
+  std::string text(kMaxSceneBytes + 1, '\0');
+  in.read(text.data(), static_cast<std::streamsize>(text.size()));
+  if (in.bad()) throw InputError(file + ": cannot read the scene file");
+  text.resize(static_cast<std::size_t>(in.gcount()));
+  if (text.size() > kMaxSceneBytes)
+    throw InputError(file + ": larger than the " + std::to_string(kMaxSceneBytes >> 20) + " MiB a scene file may have");
+  if (text.empty()) throw InputError(file + ": the scene file is empty");
+  return fromString(text, file, overrides);
 }
 
 void Config::applyOverride(const std::string& assignment) {
+  const std::string shown = clipForMessage(assignment);
   const auto eq = assignment.find('=');
   if (eq == std::string::npos || eq == 0)
-    throw InputError("--set '" + assignment + "': expected KEY=VALUE, e.g. --set fluid.viscosity=1e-3");
+    throw InputError("--set '" + shown + "': expected KEY=VALUE, e.g. --set fluid.viscosity=1e-3");
   const std::string key = assignment.substr(0, eq), text = assignment.substr(eq + 1);
+  const auto segs = splitPath(key, shown);
+  if (segs.empty()) throw InputError("--set '" + shown + "': empty key");
   toml::table parsed;
   bool is_toml = true;
+  checkSceneText("v = " + text, "--set '" + shown + "'");
   try {
     parsed = toml::parse("v = " + text);
   } catch (const toml::parse_error&) {
     is_toml = false;
   }
-  const auto segs = splitPath(key);
-  if (segs.empty()) throw InputError("--set '" + assignment + "': empty key");
   toml::node* cur = &table_;
   for (std::size_t s = 0; s + 1 < segs.size(); ++s) {
     const std::string& g = segs[s];
     if (g.front() == '[') {
       auto* arr = cur->as_array();
-      const std::size_t idx = std::stoul(g.substr(1, g.size() - 2));
+      const std::size_t idx = std::stoul(g.substr(1, g.size() - 2));  // at most 9 digits (splitPath)
       if (!arr || idx >= arr->size())
-        throw InputError("--set '" + assignment + "': no array element " + g + " at that key");
+        throw InputError("--set '" + shown + "': no array element " + g + " at that key");
       cur = arr->get(idx);
     } else {
       auto* t = cur->as_table();
-      if (!t) throw InputError("--set '" + assignment + "': '" + g + "' is not inside a table");
+      if (!t) throw InputError("--set '" + shown + "': '" + clipForMessage(g) + "' is not inside a table");
       if (!t->contains(g)) t->insert(g, toml::table{});
       cur = t->get(g);
     }
@@ -121,7 +277,7 @@ void Config::applyOverride(const std::string& assignment) {
   const std::string& last = segs.back();
   auto* t = cur->as_table();
   if (!t || last.front() == '[')
-    throw InputError("--set '" + assignment + "': the key must name a table entry");
+    throw InputError("--set '" + shown + "': the key must name a table entry");
   if (is_toml) t->insert_or_assign(last, *parsed.get("v"));
   else t->insert_or_assign(last, text);
 }
@@ -134,7 +290,7 @@ void Config::checkTable(const toml::table& t, const std::string& path) const {
     const std::string key(k.str());
     const std::string full = path.empty() ? key : path + "." + key;
     if (it == queried_.end() || !it->second.count(key)) {
-      std::string msg = file_ + ": unknown key '" + full + "'" + lineOf(&v);
+      std::string msg = file_ + ": unknown key '" + clipForMessage(full) + "'" + lineOf(&v);
       if (it != queried_.end() && !it->second.empty()) {
         std::vector<std::string> known(it->second.begin(), it->second.end());
         msg += "; valid keys " + (path.empty() ? std::string("at the top level") : "in [" + path + "]") +
@@ -189,6 +345,18 @@ double ConfigTable::number(std::string_view key, std::optional<double> def, Boun
   if (bound == Bound::positive && !(*v > 0)) fail(key, what + u);
   if (bound == Bound::nonnegative && !(*v >= 0)) fail(key, what + u);
   return *v;
+}
+
+double ConfigTable::numberAtMost(std::string_view key, std::optional<double> def, Bound bound, double max,
+                                 std::string_view unit) {
+  const double v = number(key, def, bound, unit);
+  if (v > max) {
+    std::ostringstream what;
+    what << (bound == Bound::positive ? "a positive number" : bound == Bound::nonnegative ? "a non-negative number" : "a number")
+         << " of at most " << max << (unit.empty() ? "" : " (" + std::string(unit) + ")");
+    fail(key, what.str());
+  }
+  return v;
 }
 
 std::optional<double> ConfigTable::optionalNumber(std::string_view key, Bound bound, std::string_view unit) {
@@ -378,10 +546,14 @@ std::string firstDifference(const toml::table& a, const toml::table& b, const st
 std::string firstSceneDifference(const std::string& a, const std::string& b, const std::set<std::string>& free) {
   toml::table ta, tb;
   try {
+    checkSceneText(a, "the stored scene");
+    checkSceneText(b, "the scene");
     ta = toml::parse(a);
     tb = toml::parse(b);
   } catch (const toml::parse_error& e) {
     return std::string("(unreadable scene: ") + std::string(e.description()) + ")";
+  } catch (const InputError& e) {
+    return std::string("(unreadable scene: ") + e.what() + ")";
   }
   return firstDifference(ta, tb, "", free);
 }

@@ -34,8 +34,10 @@ template <int D>
 class ArtificialViscosity final : public PairEffect<D, ArtificialViscosity<D>> {
  public:
   explicit ArtificialViscosity(ConfigTable& cfg)
-      : alpha_(cfg.number("alpha", 1.0, Bound::nonnegative)),
-        beta_(cfg.number("beta", 2.0, Bound::nonnegative)),
+      // Monaghan's alpha and beta are O(1) (Fang et al. take 1 and 2); the limit of 100 keeps an
+      // absurd value from driving the viscous step limit to zero.
+      : alpha_(cfg.numberAtMost("alpha", 1.0, Bound::nonnegative, 100.0)),
+        beta_(cfg.numberAtMost("beta", 2.0, Bound::nonnegative, 100.0)),
         signal_speed_(cfg.optionalNumber("sound_speed", Bound::positive, "m/s")) {}
   std::string_view name() const override { return "artificial_viscosity"; }
   Phase phase() const override { return Phase::forces; }

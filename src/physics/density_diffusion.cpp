@@ -55,7 +55,9 @@ template <int D>
 class DensityDiffusion final : public PairEffect<D, DensityDiffusion<D>> {
  public:
   explicit DensityDiffusion(ConfigTable& cfg)
-      : delta_(cfg.number("delta", 0.1, Bound::nonnegative)),
+      // delta-SPH takes delta ~ 0.1 (Molteni & Colagrossi 2009); beyond 10 the diffusion's step
+      // limit would only shrink the step towards zero.
+      : delta_(cfg.numberAtMost("delta", 0.1, Bound::nonnegative, 10.0)),
         hydrostatic_(cfg.boolean("hydrostatic", true)),
         include_walls_(cfg.choice("walls", "skip", {"skip", "include"}) == "include") {}
   std::string_view name() const override { return "density_diffusion"; }

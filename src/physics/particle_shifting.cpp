@@ -47,7 +47,9 @@ class ParticleShifting final : public PairEffect<D, ParticleShifting<D>> {
  public:
   explicit ParticleShifting(ConfigTable& cfg)
       : coefficient_(cfg.numberIn("coefficient", 2.0, 0.0, 100.0, "A of the shifting velocity -A h U grad C")),
-        speed_(cfg.number("speed", std::nullopt, Bound::positive)),
+        // U, a flow speed: 1e4 m/s is beyond any flow vesph resolves (an absurd U would drive the
+        // shifting step limit to zero).
+        speed_(cfg.numberAtMost("speed", std::nullopt, Bound::positive, 1e4, "m/s")),
         tensile_(cfg.numberIn("tensile_correction", 0.2, 0.0, 10.0, "R of Lind et al.'s 1 + R (W/W(dx))^n")),
         exponent_(static_cast<int>(cfg.integer("exponent", 4, 1, 16))) {}
   std::string_view name() const override { return "particle_shifting"; }

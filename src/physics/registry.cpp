@@ -1,5 +1,7 @@
 #include "vesph/physics/registry.hpp"
 
+#include <algorithm>
+
 namespace vesph {
 
 // One line per effect: name in scenes, factory (defined in the effect's own file), summary.
@@ -38,6 +40,18 @@ const std::vector<EffectEntry<D>>& effectRegistry() {
 template <int D>
 std::vector<std::unique_ptr<Effect<D>>> makeEffects(ConfigTable& effects_table) {
   std::vector<std::unique_ptr<Effect<D>>> out;
+  // One constitutive model per scene: each evolves the elastic stress (and writes the extra
+  // stress) as the only model, so a second would silently overwrite the first one's rate.
+  static const std::vector<std::string> kConstitutiveModels = {"oldroyd_b", "ucm", "second_order_fluid", "xpp"};
+  std::string first_model;
+  for (const std::string& name : effects_table.keys()) {
+    if (std::find(kConstitutiveModels.begin(), kConstitutiveModels.end(), name) == kConstitutiveModels.end()) continue;
+    if (!first_model.empty())
+      effects_table.fail(name, "one constitutive model per scene, but the scene has both [" +
+                                   effects_table.keyPath(first_model) + "] and [" + effects_table.keyPath(name) +
+                                   "]: remove one");
+    first_model = name;
+  }
   for (const std::string& name : effects_table.keys()) {
     const EffectEntry<D>* entry = nullptr;
     for (const auto& e : effectRegistry<D>())

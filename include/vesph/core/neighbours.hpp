@@ -8,6 +8,11 @@
 // between right-hand-side evaluations). Building is O(N): particles are binned into cells
 // at least cutoff + skin wide and only the 3^D surrounding cells are searched.
 //
+// The cell grid is laid over the whole domain (its geometry fixes the order in which
+// neighbours are listed), but storage is allocated only for the block of cells the particles
+// occupy at the build (the whole grid along periodic axes): a small drop in a huge domain
+// costs memory in proportion to the drop, not to the domain (docs/architecture.md).
+//
 // Layout (compressed rows): for particle i, nbr[start[i] .. split[i]) are moving
 // neighbours and nbr[split[i] .. start[i+1]) fixed ones. Fixed particles list only their
 // moving neighbours (fixed-fixed pairs are never needed).
@@ -89,8 +94,14 @@ class NeighbourList {
           }
           cc = (cc + ncell_[a]) % ncell_[a];
         }
+        // Cells outside the occupied block hold no particle.
+        cc -= block_lo_[a];
+        if (cc < 0 || cc >= block_n_[a]) {
+          skip = true;
+          break;
+        }
         cell += stride * static_cast<std::size_t>(cc);
-        stride *= static_cast<std::size_t>(ncell_[a]);
+        stride *= static_cast<std::size_t>(block_n_[a]);
       }
       if (!skip) fn(cell);
     }
@@ -100,7 +111,9 @@ class NeighbourList {
 
   Domain<D> domain_;
   double cutoff_ = 0, skin_ = 0;
-  std::array<int, D> ncell_{};
+  std::array<int, D> ncell_{};     // cells of the grid over the domain
+  std::array<int, D> block_lo_{};  // the occupied block: first cell and
+  std::array<int, D> block_n_{};   // number of cells per axis (cell storage is for these only)
   std::array<double, D> cell_width_{};
   std::vector<std::size_t> cell_start_;
   std::vector<Index> cell_items_;

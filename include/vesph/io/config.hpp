@@ -21,6 +21,20 @@ namespace vesph {
 
 class ConfigTable;
 
+// Limits on scene text (files, --set values, the scene stored in an output file), far above what
+// any scene needs: beyond them the TOML library would exhaust memory or overflow the stack.
+inline constexpr std::size_t kMaxSceneBytes = std::size_t{4} << 20;  // 4 MiB
+inline constexpr std::size_t kMaxKeyParts = 16;      // parts of a dotted key or table header
+inline constexpr std::size_t kMaxValueNesting = 16;  // arrays and inline tables inside each other
+
+// Throws InputError naming `label` when the text exceeds kMaxSceneBytes, a key or table header
+// has more than kMaxKeyParts parts, or arrays/inline tables nest deeper than kMaxValueNesting.
+void checkSceneText(const std::string& text, const std::string& label);
+
+// The text for an error message: cut after max_chars bytes (at a UTF-8 boundary), with an
+// ellipsis and the full length.
+std::string clipForMessage(const std::string& text, std::size_t max_chars = 80);
+
 // Compares two resolved scenes (TOML text, as Config::resolvedToml writes them) and returns the
 // dotted path of the first key whose value differs, or that one has and the other lacks,
 // outside the top-level tables named in `free`; empty when they agree. `vesph run --resume`
@@ -65,6 +79,10 @@ class ConfigTable {
 
   double number(std::string_view key, std::optional<double> def, Bound bound = Bound::any,
                 std::string_view unit = "");
+  // number() with an upper limit as well: for coefficients whose absurd values would pass every
+  // other check and then drive the time step to zero (docs/user-guide.md lists the limits).
+  double numberAtMost(std::string_view key, std::optional<double> def, Bound bound, double max,
+                      std::string_view unit = "");
   // A number without a default: std::nullopt when the key is absent (nothing is inserted).
   std::optional<double> optionalNumber(std::string_view key, Bound bound = Bound::any, std::string_view unit = "");
   double numberIn(std::string_view key, std::optional<double> def, double lo, double hi,

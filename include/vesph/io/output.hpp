@@ -98,6 +98,18 @@ class OutputWriter {
   };
   void appendDiagnostics(const std::vector<DiagnosticsRow>& rows);
   void writeXdmf() const;
+  void reopen(const FileAttributes& attrs, double resume_time);  // the resuming constructor's work
+  // Closes the file (once); every later write fails.
+  void close();
+  // H5Fflush; on failure closes the file and throws through failed().
+  void flush(const char* what);
+  // Closes the file and throws a runtime_error: WHAT could not be written, the room left on the
+  // disk when little is, and the last frame that is intact.
+  [[noreturn]] void failed(const std::string& what);
+  // Throws (file closed, nothing written) when the disk of the output directory has less room
+  // than `bytes` plus HDF5's metadata.
+  void ensureSpace(std::size_t bytes, const char* what);
+  std::string noSpaceNote() const;
 
   std::string dir_, name_, h5_path_, xdmf_path_;
   std::int64_t file_ = -1;
