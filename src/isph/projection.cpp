@@ -25,22 +25,7 @@ using isph::WallCondition;
 
 template <int D>
 Projection<D>::Projection(ConfigTable& cfg, std::optional<Vec<D>> inflow_direction) {
-  // Defaults: the fastest choice measured from 10 000 to 160 000 particles (docs/performance.md).
-  options_.type = cfg.choice("linear_solver", "bicgstab", {"umfpack", "klu", "bicgstab"});
-  if (options_.type == "bicgstab") {
-    options_.preconditioner = cfg.choice("preconditioner", "diagonal", {"diagonal", "ilut"});
-    options_.tolerance = cfg.numberIn("tolerance", 1e-8, 1e-15, 1e-1, "relative residual");
-    options_.max_iterations = static_cast<int>(cfg.integer("max_iterations", 2000, 1, 1000000));
-    if (options_.preconditioner == "ilut") {
-      options_.ilut_drop_tolerance = cfg.numberIn("ilut_drop_tolerance", 1e-4, 0.0, 1.0);
-      options_.ilut_fill_factor = static_cast<int>(cfg.integer("ilut_fill_factor", 10, 1, 1000));
-    }
-  } else {
-    for (const char* key : {"preconditioner", "tolerance", "max_iterations", "ilut_drop_tolerance", "ilut_fill_factor"})
-      if (cfg.has(key))
-        cfg.fail(key, "no " + std::string(key) + " for the direct solver '" + options_.type +
-                          "' (it is a key of linear_solver = \"bicgstab\")");
-  }
+  options_ = readLinearSolverOptions(cfg);
   laplacian_ = cfg.choice("laplacian", "consistent", {"consistent", "morris"}) == "consistent" ? LaplacianForm::consistent
                                                                                               : LaplacianForm::morris;
   const std::string g = cfg.choice("gradient", "renormalised", {"renormalised", "difference", "symmetric"});

@@ -1,13 +1,18 @@
 #pragma once
-// Sparse linear solvers for the pressure Poisson equation of ISPH (DESIGN.md "ISPH"). The
-// matrix is not symmetric in general (the wall pressures are eliminated into the fluid rows,
-// src/isph/projection.cpp), so the direct solvers are LU factorisations:
+// Sparse linear solvers for the pressure Poisson equation of ISPH (docs/architecture.md, "ISPH";
+// docs/theory.md). The matrix is not symmetric in general (the wall pressures are eliminated
+// into the fluid rows, src/isph/projection.cpp), so the direct solvers are LU factorisations:
 //   umfpack   SuiteSparse UMFPACK (multifrontal LU), through Eigen's UmfPackLU
 //   klu       SuiteSparse KLU (left-looking LU for circuit-like matrices), Eigen's KLU
-//   bicgstab  Eigen's BiCGSTAB with a diagonal (Jacobi) or incomplete-LU (ILUT) preconditioner,
-//             warm-started from the previous step's pressure
+// and the Krylov solvers are warm-started from the previous step's pressure:
+//   bicgstab  BiCGSTAB            } preconditioner = "diagonal" (Jacobi) or "ilut" (incomplete LU):
+//   cg        conjugate gradients } Eigen's solvers (cg and gmres in Eigen's unsupported module);
+//   gmres     restarted GMRES     } preconditioner = "amg": hypre's Krylov solver preconditioned
+//                                   by one BoomerAMG V-cycle (src/isph/amg_solver.cpp)
 // The direct solvers keep the symbolic analysis while the sparsity pattern is unchanged
-// (between neighbour-list rebuilds, the pattern is that of the candidate list).
+// (between neighbour-list rebuilds, the pattern is that of the candidate list); the AMG
+// preconditioner keeps its hierarchy while the pattern is unchanged, for at most
+// amg_setup_interval solves (its coarse levels then lag the matrix's values).
 #include <Eigen/Sparse>
 #include <memory>
 #include <string>
@@ -15,16 +20,25 @@
 
 namespace vesph {
 
+class ConfigTable;
+
 using SparseRowMatrix = Eigen::SparseMatrix<double, Eigen::RowMajor, int>;
 
 struct LinearSolverOptions {
-  std::string type = "bicgstab";           // umfpack | klu | bicgstab
-  std::string preconditioner = "diagonal";  // bicgstab: diagonal | ilut
-  double tolerance = 1e-8;                  // bicgstab: relative residual |Ax-b|/|b|
-  int max_iterations = 2000;                // bicgstab
+  std::string type = "bicgstab";           // umfpack | klu | bicgstab | cg | gmres
+  std::string preconditioner = "diagonal";  // Krylov solvers: diagonal | ilut | amg (scenes default to amg: readLinearSolverOptions)
+  double tolerance = 1e-8;                  // Krylov: relative residual |Ax-b|/|b|
+  int max_iterations = 2000;                // Krylov
   double ilut_drop_tolerance = 1e-4;        // ilut: entries below this times the row norm are dropped
   int ilut_fill_factor = 10;                // ilut: fill-in per row relative to the matrix
+  int gmres_restart = 30;                   // gmres: Krylov vectors kept before a restart
+  int amg_setup_interval = 1;               // amg: solves that share one hierarchy (pattern unchanged)
+  double amg_strong_threshold = 0.25;       // amg: BoomerAMG's strength of connection
 };
+
+// Reads solver.linear_solver, solver.preconditioner and their sub-keys (the keys are listed in
+// docs/user-guide.md, "[solver]"); keys that do not belong to the chosen solver are errors.
+LinearSolverOptions readLinearSolverOptions(ConfigTable& solver_table);
 
 struct SolveReport {
   bool ok = false;
@@ -37,7 +51,7 @@ class LinearSolver {
  public:
   virtual ~LinearSolver() = default;
   virtual std::string name() const = 0;
-  // Solves A x = b; x holds the initial guess on entry (used by the iterative solver).
+  // Solves A x = b; x holds the initial guess on entry (used by the iterative solvers).
   // pattern_changed: A's sparsity pattern differs from the previous call's.
   virtual SolveReport solve(const SparseRowMatrix& A, bool pattern_changed, const Eigen::VectorXd& b,
                             Eigen::VectorXd& x) = 0;

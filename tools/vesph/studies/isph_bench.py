@@ -1,13 +1,19 @@
 #!/usr/bin/python3
-"""Benchmark of the ISPH projection (issue 6): time per projection (assembly and solve
-separately) and per step, and BiCGSTAB iterations, for a hydrostatic tank of N x N fluid
-particles, for each linear solver. Prints a table (and --csv FILE); timings are measured,
-never asserted: run it on a quiet machine and compare ratios from one run.
+"""Benchmark of the ISPH projection (issues 6 and 31): time per projection (assembly and solve
+separately) and per step, and Krylov iterations, for a hydrostatic tank of N x N fluid
+particles, for each linear solver and thread count. Prints a table (and --csv FILE, --png
+FILE); timings are measured, never asserted: run it on a quiet machine and compare ratios from
+one run (the solvers and thread counts alternate within each size).
 
 Usage
 -----
     /usr/bin/python3 tools/isph_bench.py [--vesph build/vesph] [--sizes 100,200,400]
-        [--steps 5] [--solvers umfpack,klu,bicgstab+diagonal,bicgstab+ilut] [--threads 1]
+        [--steps 5] [--solvers umfpack,klu,bicgstab+diagonal,bicgstab+ilut,bicgstab+amg]
+        [--threads 1[,2]] [--csv FILE] [--png FILE]
+
+A solver is `umfpack`, `klu`, or KRYLOV+PRECONDITIONER (`bicgstab`, `cg`, `gmres` with
+`diagonal`, `ilut`, `amg`); `bicgstab+amg:K` keeps each multigrid hierarchy for K solves
+(`solver.amg_setup_interval`). The solve time includes the AMG set-up.
 
 The scene is cases/hydrostatic_tank_isph.toml scaled: N particles across the 0.1 m depth and
 width (dx = 0.1/N), walls 5 layers thick, a fixed step of 1e-3 s (the solve does not depend on
@@ -70,11 +76,45 @@ end = {end}
 """
 
 
+def is_direct(name):
+    return name in ("umfpack", "klu")
+
+
 def solver_keys(name):
-    if name.startswith("bicgstab"):
-        pc = name.split("+")[1] if "+" in name else "ilut"
-        return f'linear_solver = "bicgstab"\npreconditioner = "{pc}"\ntolerance = 1e-8\nmax_iterations = 10000'
-    return f'linear_solver = "{name}"'
+    if is_direct(name):
+        return f'linear_solver = "{name}"'
+    krylov, _, pc = name.partition("+")
+    pc, _, interval = (pc or "ilut").partition(":")
+    keys = f'linear_solver = "{krylov}"\npreconditioner = "{pc}"\ntolerance = 1e-8\nmax_iterations = 10000'
+    if interval:
+        keys += f"\namg_setup_interval = {int(interval)}"
+    return keys
+
+
+def plot(rows, path):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, (ax_t, ax_i) = plt.subplots(1, 2, figsize=(11, 4.2))
+    for key in sorted({(r[1], r[8]) for r in rows}):
+        sel = sorted((r for r in rows if (r[1], r[8]) == key), key=lambda r: r[2])
+        label = f"{key[0]}, {key[1]} thread{'s' if key[1] > 1 else ''}"
+        style = "-" if key[1] == 1 else "--"
+        ax_t.loglog([r[2] for r in sel], [r[4] for r in sel], style, marker="o", label=label)
+        if not is_direct(key[0]):
+            ax_i.semilogx([r[2] for r in sel], [r[7] for r in sel], style, marker="o", label=label)
+    ax_t.set_xlabel("unknowns")
+    ax_t.set_ylabel("pressure solve per step [s]")
+    ax_t.grid(True, which="both", alpha=0.3)
+    ax_t.legend(fontsize=7)
+    ax_i.set_xlabel("unknowns")
+    ax_i.set_ylabel("Krylov iterations per solve")
+    ax_i.set_yscale("log")
+    ax_i.grid(True, which="both", alpha=0.3)
+    ax_i.legend(fontsize=7)
+    fig.suptitle("ISPH hydrostatic tank (2D): pressure solve against size")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
 
 
 def main(argv=None):
@@ -82,26 +122,33 @@ def main(argv=None):
     ap.add_argument("--vesph", default=DEFAULT_VESPH)
     ap.add_argument("--sizes", default="100,200,400", help="particles across the tank (N: N^2 fluid particles)")
     ap.add_argument("--steps", type=int, default=5)
-    ap.add_argument("--solvers", default="umfpack,klu,bicgstab+diagonal,bicgstab+ilut")
-    ap.add_argument("--threads", type=int, default=1)
+    ap.add_argument("--solvers", default="umfpack,klu,bicgstab+diagonal,bicgstab+ilut,bicgstab+amg")
+    ap.add_argument("--threads", default="1", help="comma-separated thread counts (OMP_NUM_THREADS)")
     ap.add_argument("--direct-up-to", type=int, default=200, metavar="N",
                     help="run the direct solvers only up to N particles across (default 200: at 400 a "
                          "UMFPACK solve takes minutes)")
+    ap.add_argument("--unpreconditioned-up-to", type=int, default=400, metavar="N",
+                    help="run the Krylov solvers without amg only up to N particles across (default 400: "
+                         "their iterations grow like N)")
+    ap.add_argument("--png", metavar="FILE", help="plot of solve time and iterations against size")
     ap.add_argument("--csv", metavar="FILE")
     a = ap.parse_args(argv)
     if not os.path.exists(a.vesph):
         ap.error(f"{a.vesph}: no such file (build vesph first, or give --vesph)")
-    env = dict(os.environ, OMP_NUM_THREADS=str(a.threads))
     rows = []
-    print(f"{'N_fluid':>8} {'solver':>18} {'unknowns':>9} {'assembly_s':>11} {'solve_s':>10} {'projection_s':>13} "
-          f"{'step_s':>9} {'iterations':>10}")
+    print(f"{'N_fluid':>8} {'solver':>18} {'thr':>3} {'unknowns':>9} {'assembly_s':>11} {'solve_s':>10} "
+          f"{'projection_s':>13} {'step_s':>9} {'iterations':>10}")
     with tempfile.TemporaryDirectory() as work:
         for n in (int(s) for s in a.sizes.split(",")):
             dx = 0.1 / n
             lo, hi, top = -5 * dx, 0.1 + 5 * dx, 0.1 + 8 * dx
-            for solver in a.solvers.split(","):
-                if not solver.startswith("bicgstab") and n > a.direct_up_to:
+            for solver, threads in ((s, int(t)) for s in a.solvers.split(",") for t in a.threads.split(",")):
+                env = dict(os.environ, OMP_NUM_THREADS=str(threads))
+                if is_direct(solver) and n > a.direct_up_to:
                     print(f"{n*n:8d} {solver:>18} skipped (--direct-up-to {a.direct_up_to})")
+                    continue
+                if not is_direct(solver) and "+amg" not in solver and n > a.unpreconditioned_up_to:
+                    print(f"{n*n:8d} {solver:>18} skipped (--unpreconditioned-up-to {a.unpreconditioned_up_to})")
                     continue
                 scene = os.path.join(work, "bench.toml")
                 with open(scene, "w") as f:
@@ -111,7 +158,7 @@ def main(argv=None):
                 r = subprocess.run([a.vesph, "run", scene, "-o", out, "--quiet"], env=env,
                                    capture_output=True, text=True)
                 if r.returncode != 0:
-                    print(f"{n*n:8d} {solver:>18} failed (exit {r.returncode}): {r.stderr.strip()[-300:]}")
+                    print(f"{n*n:8d} {solver:>18} {threads:3d} failed (exit {r.returncode}): {r.stderr.strip()[-300:]}")
                     continue
                 with open(os.path.join(out, "summary.json")) as f:
                     s = json.load(f)
@@ -121,17 +168,19 @@ def main(argv=None):
                     unknowns = int(h.diagnostics("pressure_unknowns")[0][-1])
                 row = (n * n, solver, unknowns, i["assembly_seconds"] / k, i["solve_seconds"] / k,
                        (i["assembly_seconds"] + i["solve_seconds"] + i["correction_seconds"]) / k,
-                       s["wall_seconds"] / max(s["steps"], 1), i["iterations_mean"])
+                       s["wall_seconds"] / max(s["steps"], 1), i["iterations_mean"], threads)
                 rows.append(row)
-                print(f"{row[0]:8d} {row[1]:>18} {row[2]:9d} {row[3]:11.4f} {row[4]:10.4f} {row[5]:13.4f} "
-                      f"{row[6]:9.4f} {row[7]:10.1f}")
+                print(f"{row[0]:8d} {row[1]:>18} {threads:3d} {row[2]:9d} {row[3]:11.4f} {row[4]:10.4f} "
+                      f"{row[5]:13.4f} {row[6]:9.4f} {row[7]:10.1f}")
                 sys.stdout.flush()
-    print(f"# means over {a.steps} steps, {a.threads} thread(s); BiCGSTAB tolerance 1e-8 (relative residual)")
+    print(f"# means over {a.steps} steps; Krylov tolerance 1e-8 (relative residual)")
     if a.csv:
         with open(a.csv, "w") as f:
-            f.write("fluid_particles,solver,unknowns,assembly_s,solve_s,projection_s,step_s,iterations\n")
+            f.write("fluid_particles,solver,unknowns,assembly_s,solve_s,projection_s,step_s,iterations,threads\n")
             for r in rows:
                 f.write(",".join(str(x) for x in r) + "\n")
+    if a.png and rows:
+        plot(rows, a.png)
     return 0
 
 
