@@ -4,7 +4,7 @@
 // The list holds every pair closer than cutoff + skin at build time. It is rebuilt only
 // when some moving particle has moved more than skin/2 since the last build: two particles
 // then approach by less than the skin, so no pair inside the cutoff is ever missed, whatever
-// positions the integrator's stages try (DESIGN.md: multi-stage methods move particles
+// positions the integrator's stages try (docs/architecture.md "Integrators": multi-stage methods move particles
 // between right-hand-side evaluations). Building is O(N): particles are binned into cells
 // at least cutoff + skin wide and only the 3^D surrounding cells are searched.
 //

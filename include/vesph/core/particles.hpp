@@ -1,5 +1,5 @@
 #pragma once
-// Structure-of-arrays particle storage (DESIGN.md "ParticleSet").
+// Structure-of-arrays particle storage (docs/architecture.md "The shape").
 // Particles [0, n_moving) move and form the ODE state; [n_moving, size()) are fixed
 // (walls, dummy layers). Always present: position, velocity, density, mass, kind, id.
 // Every other field (pressure, extra stress, free-surface flag, ...) exists only when an
@@ -46,7 +46,7 @@ class FieldStore {
 };
 
 // A change of the moving set between two steps (an inflow releases particles, an outflow
-// removes them; DESIGN.md "Particle count may change during a run"). The fixed particles keep
+// removes them; docs/architecture.md "The life of one step"). The fixed particles keep
 // their order; fixed particle k (old index old_moving + k) becomes new index newMoving() + k.
 struct ParticleRemap {
   std::size_t old_size = 0, old_moving = 0;

@@ -22,7 +22,7 @@ constexpr std::size_t kParallelMinimumValues = std::size_t{1} << 17;
 template <int D>
 using Vec = Eigen::Matrix<double, D, 1>;
 
-// Particle kinds as written to the output (`kind` dataset, DESIGN.md "Output").
+// Particle kinds as written to the output (`kind` dataset, docs/user-guide.md, output format).
 enum class ParticleKind : std::uint8_t {
   fluid = 0,   // moving particles, part of the ODE state
   wall = 1,    // fixed wall particles in contact with the fluid

@@ -1,5 +1,5 @@
 #pragma once
-// Output format "vesph-1" (DESIGN.md "Output"): DIR/<name>.h5 with one group per frame and
+// Output format "vesph-1" (docs/architecture.md "Output"; docs/user-guide.md): DIR/<name>.h5 with one group per frame and
 // the per-step diagnostics, DIR/<name>.xdmf describing the frames for ParaView/VisIt, and
 // DIR/summary.json. The HDF5 file is flushed after every frame and the XDMF file replaced
 // atomically, so whatever was written before a failure or an interruption stays readable.

@@ -1,5 +1,5 @@
 #pragma once
-// Names map to factories (DESIGN.md "Style"): a scene switches an effect on by giving its
+// Names map to factories (docs/architecture.md "Effects"): a scene switches an effect on by giving its
 // table, [effects.<name>]. The registry lists every effect; src/physics/registry.cpp holds
 // one registration line per effect.
 #include <functional>
