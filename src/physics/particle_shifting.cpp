@@ -47,9 +47,10 @@ class ParticleShifting final : public PairEffect<D, ParticleShifting<D>> {
  public:
   explicit ParticleShifting(ConfigTable& cfg)
       : coefficient_(cfg.numberIn("coefficient", 2.0, 0.0, 100.0, "A of the shifting velocity -A h U grad C")),
-        // U, a flow speed: 1e4 m/s is beyond any flow vesph resolves (an absurd U would drive the
-        // shifting step limit to zero).
-        speed_(cfg.numberAtMost("speed", std::nullopt, Bound::positive, 1e4, "m/s")),
+        // U, a flow speed in m/s: 1e4 m/s is beyond any flow vesph resolves (an absurd U would
+        // drive the shifting step limit to zero). Read without a unit label, as before the bound,
+        // so that the missing-key message stays the one users and tests know.
+        speed_(cfg.numberAtMost("speed", std::nullopt, Bound::positive, 1e4)),
         tensile_(cfg.numberIn("tensile_correction", 0.2, 0.0, 10.0, "R of Lind et al.'s 1 + R (W/W(dx))^n")),
         exponent_(static_cast<int>(cfg.integer("exponent", 4, 1, 16))) {}
   std::string_view name() const override { return "particle_shifting"; }
