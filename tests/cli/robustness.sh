@@ -73,6 +73,10 @@ expect 2 "integrator.step: expected a step of at least 1e-12 time.end" -- "$VESP
 # (it ran for ever before): exit 3 naming the step and the limit; the last good frame is written.
 expect 3 "step 1 \(t = .*\) was .* s, below the step floor 1e-12 time.end = 5e-13 s; the (viscous|acoustic) limit set it" -- timeout 60 "$VESPH" run "$S" -o "$WORK/floor" --quiet --set fluid.viscosity=1e6
 grep -q '"status": "diverged"' "$WORK/floor/summary.json" && pass || fail "the collapsed step's summary is not 'diverged'"
+# A last good frame must be finite (item 10): a sound speed whose square overflows gives a NaN
+# pressure at t = 0 (finite state): no frame of NaN is written as "last good", and the message
+# says so.
+expect 3 "non-finite pressure or stress in the frame at t = 0 s; the last good state \(t = 0.000000 s\) gives non-finite pressures or stresses and is not written; the file holds no frame" -- "$VESPH" run "$SRC/cases/bench_periodic_box.toml" -o "$WORK/nan" --quiet --set effects.equation_of_state.sound_speed=1e200
 # check catches what run refuses (item 6): a name too long for a file name; a scene of any size
 # is stored (3000 output times made the scene attribute overflow HDF5's 64 KiB).
 LONG=$($PY -c "print('n' * 250)")
