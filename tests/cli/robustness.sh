@@ -89,7 +89,11 @@ $PY - "$WORK/big_scene/poiseuille_newtonian.h5" "$SRC/tools" <<'PYEOF' && pass |
 import sys
 sys.path.insert(0, sys.argv[2])
 import h5py
-from vesph.output import Output
+from vesph.output import open_h5, read_header
+f, _ = open_h5(sys.argv[1])
+scene_read, dim, dx = read_header(f, sys.argv[1])
+assert len(scene_read["output"]["times"]) == 3000, len(scene_read["output"]["times"])
+f.close()
 with h5py.File(sys.argv[1], "r") as f:
     scene = f.attrs["scene"]
     scene = scene.decode() if isinstance(scene, bytes) else scene
