@@ -3,6 +3,7 @@
 #include <hdf5.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -54,6 +55,10 @@ class Handle {
   hid_t id_;
   herr_t (*close_)(hid_t);
 };
+
+// The largest scene stored in HDF5's original file format (its attributes share a 64 KiB
+// object header with the file's other root attributes).
+constexpr std::size_t kCompactSceneBytes = 32768;
 
 void attrString(hid_t loc, const char* name, const std::string& value) {
   Handle type(checkId(H5Tcopy(H5T_C_S1), name), H5Tclose);
@@ -213,6 +218,37 @@ void writeResizable(hid_t group, const char* name, hid_t file_type, hid_t mem_ty
 
 }  // namespace
 
+namespace {
+struct Fnv1a64 {
+  std::uint64_t hash = 14695981039346656037ull;  // the FNV-1a offset basis
+  void add(const void* data, std::size_t bytes) {
+    const auto* b = static_cast<const unsigned char*>(data);
+    for (std::size_t k = 0; k < bytes; ++k) hash = (hash ^ b[k]) * 1099511628211ull;  // the FNV prime
+  }
+  template <class T>
+  void addVector(const std::vector<T>& v) {
+    const std::uint64_t n = v.size();
+    add(&n, sizeof n);
+    add(v.data(), v.size() * sizeof(T));
+  }
+};
+}  // namespace
+
+std::uint64_t checkpointChecksum(const Checkpoint& c) {
+  static_assert(std::endian::native == std::endian::little, "the checksum hashes the stored (little-endian) bytes");
+  Fnv1a64 h;
+  h.addVector(c.state);
+  h.addVector(c.id);
+  std::vector<const std::pair<std::string, std::vector<double>>*> arrays;
+  for (const auto& a : c.arrays) arrays.push_back(&a);
+  std::sort(arrays.begin(), arrays.end(), [](const auto* a, const auto* b) { return a->first < b->first; });
+  for (const auto* a : arrays) {
+    h.add(a->first.data(), a->first.size() + 1);  // with its terminating zero
+    h.addVector(a->second);
+  }
+  return h.hash;
+}
+
 ResumeSource readResumeSource(const std::string& dir, const std::string& name) {
   const std::string path = (std::filesystem::path(dir) / (name + ".h5")).string();
   if (!std::filesystem::exists(path))
@@ -249,6 +285,19 @@ ResumeSource readResumeSource(const std::string& dir, const std::string& name) {
         if (len < 0) continue;
         if (static_cast<std::size_t>(len) >= sizeof aname) malformed(arr, "", "an array name longer than 255 characters");
         c.arrays.emplace_back(aname, readVector<double>(arr, aname, H5T_NATIVE_DOUBLE));
+      }
+    }
+    if (H5Aexists(g, "checksum") > 0) c.checksum = readAttrScalar<std::uint64_t>(g, "checksum", H5T_NATIVE_UINT64);
+    if (H5Lexists(file, "frames", H5P_DEFAULT) > 0) {
+      Handle frames(H5Gopen2(file, "frames", H5P_DEFAULT), H5Gclose);
+      if (frames < 0) malformed(file, "frames", "not a group");
+      for (std::size_t k = 0;; ++k) {
+        char gname[32];
+        std::snprintf(gname, sizeof gname, "%06zu", k);
+        if (H5Lexists(frames, gname, H5P_DEFAULT) <= 0) break;
+        Handle fg(H5Gopen2(frames, gname, H5P_DEFAULT), H5Gclose);
+        if (fg < 0) malformed(frames, gname, "not a group");
+        if (H5Aexists(fg, "time") > 0) r.frame_times.push_back(readAttrScalar<double>(fg, "time", H5T_NATIVE_DOUBLE));
       }
     }
   } catch (const InputError& e) {
@@ -366,6 +415,22 @@ void OutputWriter<D>::writeCheckpoint(const Checkpoint& c) {
       for (const auto& [aname, values] : c.arrays)
         writeResizable(arr, aname.c_str(), H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, values.data(), values.size());
     }
+    // Arrays of an earlier checkpoint that this one does not carry (the integrator's rate after
+    // a divergence) are removed: they are not part of this restart point, nor of its checksum.
+    if (H5Lexists(g, "arrays", H5P_DEFAULT) > 0) {
+      Handle arr(checkId(H5Gopen2(g, "arrays", H5P_DEFAULT), "checkpoint arrays"), H5Gclose);
+      H5G_info_t info;
+      check(H5Gget_info(arr, &info), "checkpoint arrays");
+      std::vector<std::string> stale;
+      for (hsize_t k = 0; k < info.nlinks; ++k) {
+        char aname[256];
+        const ssize_t len = H5Lget_name_by_idx(arr, ".", H5_INDEX_NAME, H5_ITER_INC, k, aname, sizeof aname, H5P_DEFAULT);
+        if (len < 0 || static_cast<std::size_t>(len) >= sizeof aname) continue;
+        if (!c.find(aname)) stale.emplace_back(aname);
+      }
+      for (const std::string& aname : stale) check(H5Ldelete(arr, aname.c_str(), H5P_DEFAULT), "stale checkpoint array");
+    }
+    replaceAttrScalar<std::uint64_t>(g, "checksum", H5T_NATIVE_UINT64, checkpointChecksum(c));
     replaceAttrScalar<std::int64_t>(g, "step", H5T_NATIVE_INT64, c.step);
     replaceAttrScalar<std::uint64_t>(g, "rhs_evals", H5T_NATIVE_UINT64, c.rhs_evals);
     replaceAttrScalar<std::uint64_t>(g, "rejected_steps", H5T_NATIVE_UINT64, c.rejected_steps);
@@ -390,6 +455,13 @@ OutputWriter<D>::OutputWriter(const std::string& dir, const std::string& name, c
   startHdf5();
   {
     Handle fapl(strongCloseAccess(), H5Pclose);
+    // An attribute of HDF5's original file format lives in its object's header (64 KiB in
+    // all): a resolved scene of thousands of output times did not fit ("HDF5 error: scene").
+    // Files for a scene beyond kCompactSceneBytes use the format of HDF5 1.8, whose object
+    // headers move large attributes to dense storage; readers (h5py, tools/vesph/output.py)
+    // read the attribute as before. Smaller scenes keep the original format, byte for byte.
+    if (attrs.scene_toml.size() > kCompactSceneBytes)
+      check(H5Pset_libver_bounds(fapl, H5F_LIBVER_V18, H5F_LIBVER_LATEST), "file format");
     file_ = H5Fcreate(h5_path_.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl);
   }
   if (file_ < 0) throw std::runtime_error("cannot create " + h5_path_ + noSpaceNote());

@@ -18,7 +18,9 @@ template <int D>
 class EquationOfState final : public Effect<D>, public PressureModel {
  public:
   explicit EquationOfState(ConfigTable& cfg) {
-    p0_ = cfg.number("reference_pressure", 0.0, Bound::any, "Pa");
+    // |p0| <= 1e12 Pa (a thousand times the pressure at the bottom of the deepest ocean): 1e308
+    // overflowed the pressure of the first evaluation.
+    p0_ = cfg.numberIn("reference_pressure", 0.0, -1e12, 1e12, "Pa");
     if (cfg.isTable("sound_speed")) {
       ConfigTable rule = cfg.table("sound_speed");
       phi_ = rule.number("phi", 4.0, Bound::positive);

@@ -2,6 +2,9 @@
 
 #include "vesph/io/config.hpp"
 
+#include <algorithm>
+#include <cmath>
+#include <sstream>
 #include <utility>
 
 namespace vesph {
@@ -120,6 +123,59 @@ InputError Checkpoints<D>::anotherParticleSet() const {
                     std::to_string(state_.size()) + ")");
 }
 
+// What a resumed run starts from is checked before it is used (docs/user-guide.md "Resuming"):
+// the checksum written with it (files of vesph versions before it carry none and are taken as
+// they are), the time (within the run and that of one of the file's frames), every value finite.
+template <int D>
+void Checkpoints<D>::validate(const ResumeSource& src, const ResumeRules& rules) const {
+  const Checkpoint& ck = src.checkpoint;
+  auto refuse = [&](const std::string& what) { throw InputError("--resume: the checkpoint in " + where_ + " " + what); };
+  if (ck.checksum && *ck.checksum != checkpointChecksum(ck))
+    refuse("fails its checksum (the state, ids or carried arrays changed after they were written)");
+  std::ostringstream t;
+  t << ck.time;
+  if (!(ck.time >= 0)) refuse("is at t = " + t.str() + " s, before the start of the run");
+  if (!(ck.time < rules.end_time * (1 + 1e-12)))
+    throw InputError("--resume: the checkpoint is at t = " + std::to_string(ck.time) + " s, beyond time.end = " +
+                     std::to_string(rules.end_time) + " s; raise time.end to go on");
+  const double tol = 1e-12 * std::max(1.0, std::abs(ck.time));
+  if (std::none_of(src.frame_times.begin(), src.frame_times.end(),
+                   [&](double ft) { return std::abs(ft - ck.time) <= tol; }))
+    refuse("is at t = " + t.str() + " s, the time of none of the file's frames");
+  auto finite = [](const std::vector<double>& v) {
+    return std::all_of(v.begin(), v.end(), [](double x) { return std::isfinite(x); });
+  };
+  if (!finite(ck.state)) refuse("holds a non-finite state value");
+  for (const auto& [aname, values] : ck.arrays)
+    if (!finite(values)) refuse("holds a non-finite value in its array '" + aname + "'");
+  std::vector<std::uint64_t> ids = ck.id;
+  std::sort(ids.begin(), ids.end());
+  if (std::adjacent_find(ids.begin(), ids.end()) != ids.end()) refuse("holds a particle id twice");
+}
+
+// The fluid particles' positions (the state's first D n_moving values): inside the domain along
+// non-periodic axes (unless particles leaving it are removed), as the step checks keep them;
+// along periodic axes the state holds them unwrapped (docs/architecture.md), so they are only
+// bounded by how far a particle can have travelled: one period plus checks.max_speed * t.
+template <int D>
+void Checkpoints<D>::validatePositions(const Checkpoint& ck, const ResumeRules& rules) const {
+  const Domain<D>& domain = system_.domain;
+  const std::size_t n = system_.particles.n_moving;
+  for (std::size_t i = 0; i < n; ++i)
+    for (int a = 0; a < D; ++a) {
+      const double x = ck.state[D * i + a];
+      const double reach = domain.periodic[a] ? domain.length(a) + rules.max_speed * ck.time : 0.0;
+      if (domain.periodic[a] || !rules.removes_leaving)
+        if (!(x >= domain.lo[a] - reach && x <= domain.hi[a] + reach)) {
+          std::ostringstream os;
+          os << "--resume: the checkpoint in " << where_ << " places particle id " << ck.id[i] << " at " << "xyz"[a]
+             << " = " << x << " m, outside the domain [" << domain.lo[a] << ", " << domain.hi[a] << "]"
+             << (domain.periodic[a] ? " by more than one period and checks.max_speed * t" : "");
+          throw InputError(os.str());
+        }
+    }
+}
+
 template <int D>
 Checkpoint Checkpoints<D>::resume(const std::string& dir, const ResumeRules& rules) {
   ResumeSource src = readResumeSource(dir, rules.scene_name);
@@ -137,14 +193,13 @@ Checkpoint Checkpoints<D>::resume(const std::string& dir, const ResumeRules& rul
     const Checkpoint*& slot;
     ~ClearOnExit() { slot = nullptr; }
   } clear_on_exit{resuming_};
-  if (!(ck.time < rules.end_time * (1 + 1e-12)))
-    throw InputError("--resume: the checkpoint is at t = " + std::to_string(ck.time) + " s, beyond time.end = " +
-                     std::to_string(rules.end_time) + " s; raise time.end to go on");
+  validate(src, rules);
   restore(ck, RestoreStage::particle_set);
   if (ck.find("domain_exit.escaped") && !rules.removes_leaving)
     throw InputError("--resume: the run in " + where_ + " removes particles that leave the domain; "
                      "checks.leave_domain cannot go back to \"stop\" (its diagnostics column would end)");
   if (ck.id != system_.particles.id || ck.state.size() != state_.size()) throw anotherParticleSet();
+  validatePositions(ck, rules);
   // Between-step arrays of effects (the lagged SOF acceleration) go back where they were.
   restore(ck, RestoreStage::scene);
   state_.values() = std::move(ck.state);

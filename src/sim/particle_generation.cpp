@@ -8,6 +8,8 @@
 #include <sstream>
 #include <tuple>
 
+#include <unistd.h>
+
 namespace vesph {
 namespace {
 
@@ -146,6 +148,32 @@ void checkOverlaps(const std::vector<Block<D>>& blocks, const LatticeGeometry<D>
     }
 }
 
+// The particle count estimated from the blocks' volumes (bounding boxes for disks and spheres;
+// image walls twice, boundary and image particles) before any is placed: a tiny
+// particles.spacing filled the memory until std::bad_alloc. Refused when the particles would
+// not fit in the machine's memory at about kBytesPerParticle each (state, particle set,
+// neighbour list, right-hand side, integrator stages).
+constexpr double kBytesPerParticle = 1024;
+
+template <int D>
+void checkParticleCount(const std::vector<Block<D>>& blocks, const LatticeGeometry<D>& g) {
+  double count = 0;
+  for (const Block<D>& b : blocks) {
+    double n = b.image ? 2.0 : 1.0;
+    for (int a = 0; a < D; ++a) n *= std::floor((b.hi[a] - b.lo[a]) / g.spacing + 0.5) + 1.0;
+    count += n;
+  }
+  const double memory = static_cast<double>(sysconf(_SC_PHYS_PAGES)) * static_cast<double>(sysconf(_SC_PAGE_SIZE));
+  if (memory > 0 && count * kBytesPerParticle > memory) {
+    std::ostringstream os;
+    os.precision(3);
+    os << g.file << ": particles.spacing: the blocks hold about " << count << " particles at a spacing of " << g.spacing
+       << " m, about " << count * kBytesPerParticle / (1 << 30) << " GiB at " << static_cast<int>(kBytesPerParticle)
+       << " bytes each, more than the " << memory / (1 << 30) << " GiB of memory of this machine";
+    throw InputError(os.str());
+  }
+}
+
 // Places the particles of the blocks, fluid blocks first, with consecutive ids.
 template <int D>
 class LatticePlacer {
@@ -271,6 +299,7 @@ std::vector<WallPoint<D>> generateParticles(ConfigTable& root, const LatticeGeom
   std::vector<Block<D>> blocks;
   for (ConfigTable& b : tables) blocks.push_back(reader.read(b));
   checkOverlaps(blocks, geometry);
+  checkParticleCount(blocks, geometry);
 
   std::vector<WallPoint<D>> wall_points;
   LatticePlacer<D>(geometry, particles, wall_points).place(blocks);

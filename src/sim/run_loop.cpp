@@ -7,7 +7,10 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <filesystem>
+#include <iterator>
+#include <sstream>
 
 #include "vesph/io/progress.hpp"
 #include "vesph/sim/integrated_system.hpp"
@@ -28,13 +31,15 @@ class RunLoop final : public StepObserver {
 
   RunReport run();
   bool accepted(double t, double dt, const double* y) override;
+  bool stepCollapsed(double t, double dt);
+  bool writtenFieldsFinite() const;
 
  private:
   using Clock = std::chrono::steady_clock;
   ResumeRules resumeRules() const;
   std::unique_ptr<OutputWriter<D>> openWriter() const;
   Checkpoint totals(double t) const;
-  void writeFrame(double t);
+  bool writeFrame(double t, bool only_if_finite = false);
   void integrate(RunStatus& status, std::string& message);
   void startIntegration();
   void writeLastGood(std::string& message);
@@ -58,7 +63,7 @@ class RunLoop final : public StepObserver {
 
 template <int D>
 ResumeRules RunLoop<D>::resumeRules() const {
-  return {sim_.header_.name, sim_.resolved_scene_, sim_.t_end_, sim_.checks_.removes_leaving};
+  return {sim_.header_.name, sim_.resolved_scene_, sim_.t_end_, sim_.checks_.removes_leaving, sim_.checks_.max_speed};
 }
 
 template <int D>
@@ -88,18 +93,65 @@ Checkpoint RunLoop<D>::totals(double t) const {
 }
 
 // A frame of the current state at time t, and its restart point. Derived fields (pressure,
-// wall values) come from an evaluation at the state.
+// wall values) come from an evaluation at the state. only_if_finite (the last good state after
+// a failure): a state whose written fields are not all finite is not written (returns false).
 template <int D>
-void RunLoop<D>::writeFrame(double t) {
-  if (!writer_ || t == last_frame_time_) return;  // that state is written already
-  last_frame_time_ = t;
+bool RunLoop<D>::writeFrame(double t, bool only_if_finite) {
+  if (!writer_ || t == last_frame_time_) return true;  // that state is written already
   const std::vector<double>& y = sim_.state_.values();
   scratch_.resize(y.size());  // the particle count may have changed (inflow, outflow)
   sim_.system_.unpack(y.data());
   sim_.system_.evaluate(t, y.data(), scratch_.data());
+  if (!writtenFieldsFinite()) {
+    if (only_if_finite) return false;
+    // The state passed the step checks but its pressure or stress is not finite (an overflow in
+    // the equation of state): a divergence, not a frame.
+    std::ostringstream os;
+    os << "non-finite pressure or stress in the frame at t = " << t << " s";
+    throw NumericalFailure(os.str());
+  }
+  last_frame_time_ = t;
   writer_->writeFrame(t, static_cast<std::int64_t>(steps_), sim_.system_.particles, pending_);
   pending_.clear();
   writer_->writeCheckpoint(sim_.checkpoints_.at(t, totals(t)));
+  return true;
+}
+
+// Whether every value a frame writes is finite: the state's (positions, velocities, densities)
+// and the derived fields of every particle (pressure, stresses).
+template <int D>
+bool RunLoop<D>::writtenFieldsFinite() const {
+  const ParticleSet<D>& p = sim_.system_.particles;
+  auto finite = [](const std::vector<double>& v) {
+    return std::all_of(v.begin(), v.end(), [](double x) { return std::isfinite(x); });
+  };
+  if (!finite(p.position) || !finite(p.velocity) || !finite(p.density)) return false;
+  if (!finite(p.mass)) return false;
+  for (const char* name : {"pressure", "extra_stress", "elastic_stress_zz"})  // as OutputWriter writes them
+    if (const Field* f = p.fields.find(name); f && f->range == Field::Range::all && !finite(f->data)) return false;
+  return true;
+}
+
+// The step floor (docs/user-guide.md "Exit codes"): a step under kStepFloor * time.end set by a
+// stability limit means the run cannot reach its end (absurd coefficients drove the step to 0
+// or 1e-311 and the run never ended). A tiny step that only lands on an output time (the limits
+// are larger) is not a collapse. Sets failure_ naming the step and the limit.
+template <int D>
+bool RunLoop<D>::stepCollapsed(double t, double dt) {
+  const double floor = kStepFloor * sim_.t_end_;
+  const StepLimits l = sim_.integrator_->limits();
+  if (!(l.smallest() < floor)) return false;
+  const std::pair<const char*, double> named[] = {
+      {"acoustic", l.acoustic}, {"viscous", l.viscous}, {"force", l.force}, {"relaxation", l.relaxation}};
+  const auto* smallest = std::min_element(std::begin(named), std::end(named),
+                                          [](const auto& a, const auto& b) { return a.second < b.second; });
+  std::ostringstream os;
+  os << "step " << steps_ + 1 << " (t = " << t << " s) was " << dt << " s, below the step floor " << kStepFloor
+     << " time.end = " << floor << " s; the " << smallest->first << " limit set it (" << smallest->second
+     << " s; acoustic " << l.acoustic << ", viscous " << l.viscous << ", force " << l.force << ", relaxation "
+     << l.relaxation << " s)";
+  failure_ = os.str();
+  return true;
 }
 
 template <int D>
@@ -107,6 +159,7 @@ bool RunLoop<D>::accepted(double t, double dt, const double* y) {
   const DiagnosticsRow row = sim_.checks_.diagnostics(sim_.system_, t, dt, y);
   failure_ = sim_.checks_.failure(sim_.system_, row, y);
   if (!failure_.empty()) return false;
+  if (dt < kStepFloor * sim_.t_end_ && stepCollapsed(t, dt)) return false;
   ++steps_;
   max_dev_seen_ = std::max(max_dev_seen_, row.max_density_deviation);
   pending_.push_back(row);
@@ -158,12 +211,22 @@ void RunLoop<D>::integrate(RunStatus& status, std::string& message) {
 template <int D>
 void RunLoop<D>::writeLastGood(std::string& message) {
   OdeState& state = sim_.state_;
-  message += "; the last good state (t = " + std::to_string(state.goodTime()) + " s) is written as the last frame";
+  const double good = state.goodTime();
   state.restoreGood();
+  bool written = false;
   try {
-    writeFrame(state.goodTime());
+    written = writeFrame(good, true);
   } catch (const NumericalFailure&) {
   }
+  // A last good frame holding inf or NaN would pass for a result (issue: a frame at t = 0 with
+  // an infinite pressure on the walls): it is left out and the message says what the file ends with.
+  if (written)
+    message += "; the last good state (t = " + std::to_string(good) + " s) is written as the last frame";
+  else if (writer_)
+    message += "; the last good state (t = " + std::to_string(good) +
+               " s) gives non-finite pressures or stresses and is not written; " +
+               (last_frame_time_ >= 0 ? "the file ends with the frame at t = " + std::to_string(last_frame_time_) + " s"
+                                      : std::string("the file holds no frame"));
 }
 
 template <int D>

@@ -10,6 +10,14 @@
 #include "vesph/sim/particle_generation.hpp"
 
 namespace vesph {
+namespace {
+// Bytes of one particle in a frame: id, kind, position, velocity, density, mass, pressure, a
+// symmetric stress and the free-surface flag (the output's datasets, docs/user-guide.md).
+template <int D>
+constexpr std::size_t bytesPerParticleFrame() {
+  return 8 + 1 + 16 * D + 16 + 8 + 8 * (D * (D + 1) / 2) + 1;
+}
+}  // namespace
 
 Config loadScene(const std::string& file, const std::vector<std::string>& overrides, SceneHeader& header) {
   Config cfg = Config::fromFile(file, overrides);
@@ -17,6 +25,11 @@ Config loadScene(const std::string& file, const std::vector<std::string>& overri
   header.name = root.string("name", std::nullopt);
   if (header.name.empty() || header.name.find_first_of("/\\ ") != std::string::npos)
     root.fail("name", "a non-empty name without spaces or slashes (it names the output files)");
+  // The output files are <name>.h5 and <name>.xdmf (and their .tmp while written): 200 bytes
+  // leave room for the suffixes under the 255 bytes a file name may have on common filesystems.
+  if (header.name.size() > kMaxSceneNameBytes)
+    root.fail("name", "a name of at most " + std::to_string(kMaxSceneNameBytes) +
+                          " bytes (it names the output files; this one has " + std::to_string(header.name.size()) + ")");
   header.dimension = static_cast<int>(root.integer("dimension", 2, 2, 3));
   return cfg;
 }
@@ -75,6 +88,14 @@ Simulation<D>::Simulation(Config& config, const SceneHeader& header) : config_(c
   const ReferenceScales scales = referenceScales(boundaries.facts.prescribed_peak_speed);
   ConfigTable integ = root.table("integrator");
   integrator_ = makeIntegrator(integ, scales, scheme_->defaultCfl());
+  // A fixed step under the step floor would be refused after the first step (exit 3): say so
+  // before the run.
+  if (const std::optional<double> step = integ.optionalNumber("step", Bound::positive, "s");
+      step && *step < kStepFloor * t_end_) {
+    std::ostringstream what;
+    what << "a step of at least " << kStepFloor << " time.end = " << kStepFloor * t_end_ << " s (the step floor)";
+    integ.fail("step", what.str());
+  }
   integrator_name_ = integrator_->name();
   readChecks(root, scales.velocity, boundaries.facts.removes_leaving);
 
@@ -108,7 +129,9 @@ void Simulation<D>::readDomainKernelFluid(ConfigTable& root) {
 
   ConfigTable fluid = root.table("fluid", false);
   rho0_ = fluid.number("density", std::nullopt, Bound::positive, "kg/m^3");
-  mu_ = fluid.number("viscosity", std::nullopt, Bound::nonnegative, "Pa s");
+  // Bounded so that the viscous step limit h^2 rho / (8 mu) of a sane scene stays above the step
+  // floor (docs/user-guide.md "Exit codes"); 1e6 Pa s is beyond bitumen's viscosity.
+  mu_ = fluid.numberAtMost("viscosity", std::nullopt, Bound::nonnegative, kMaxViscosity, "Pa s");
 }
 
 template <int D>
@@ -135,6 +158,16 @@ void Simulation<D>::readOutputTimes(ConfigTable& root) {
   const double interval = out.number("interval", t_end_, Bound::positive, "s");
   for (double t : times)
     if (!(t > 0 && t <= t_end_ * (1 + 1e-12))) out.fail("times", "output times in (0, time.end]");
+  // Counted before the list is filled: a tiny interval allocated until std::bad_alloc.
+  const double from_interval = std::floor(t_end_ / interval);
+  if (static_cast<double>(times.size()) + from_interval > static_cast<double>(kMaxOutputTimes)) {
+    const std::size_t n = system_.particles.size();
+    std::ostringstream what;
+    what << "at most " << kMaxOutputTimes << " output times (output.interval and output.times give "
+         << static_cast<double>(times.size()) + from_interval << "; each frame of the " << n << " particles holds about "
+         << static_cast<double>(n * bytesPerParticleFrame<D>()) / 1048576.0 << " MiB)";
+    out.fail(times.size() > kMaxOutputTimes ? "times" : "interval", what.str());
+  }
   for (double t = interval; t < t_end_ * (1 - 1e-12); t += interval) times.push_back(t);
   times.push_back(t_end_);
   std::sort(times.begin(), times.end());

@@ -159,6 +159,8 @@ class ArkodeErk final : public Integrator {
     return s;
   }
 
+  StepLimits limits() const override { return sys_ ? stepLimits(sys_->stability(), control_) : StepLimits{}; }
+
  private:
   double limit() const { return stepLimits(sys_->stability(), control_).smallest(); }
 

@@ -25,6 +25,10 @@ class FixedStepIntegrator : public Integrator {
     ++stats_.rhs_evals;
   }
 
+  StepLimits limits() const override {
+    return sys_ && control_.fixed_step == 0 ? stepLimits(sys_->stability(), control_) : StepLimits{};
+  }
+
   bool advance(double tout) override {
     while (t_ < tout) {
       double dt = control_.fixed_step > 0 ? control_.fixed_step : stepLimits(sys_->stability(), control_).smallest();

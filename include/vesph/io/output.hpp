@@ -5,6 +5,7 @@
 // atomically, so whatever was written before a failure or an interruption stays readable.
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -49,6 +50,9 @@ struct Checkpoint {
   // Arrays carried between steps, by name: "<effect or hook>.<array>" (saveCarried),
   // "integrator.carried", and for a changing particle set "particles.*", "system.next_id".
   std::vector<std::pair<std::string, std::vector<double>>> arrays;
+  // As read from a file: its "checksum" attribute (checkpointChecksum when written); absent in
+  // files of vesph versions before it.
+  std::optional<std::uint64_t> checksum;
   // The carried array of that name, or nullptr when the checkpoint has none.
   const std::vector<double>* find(const std::string& name) const {
     for (const auto& [aname, values] : arrays)
@@ -63,7 +67,13 @@ struct Checkpoint {
 struct ResumeSource {
   std::string scene_toml;
   Checkpoint checkpoint;
+  std::vector<double> frame_times;  // of the file's complete frames (those with a time)
 };
+
+// FNV-1a (64 bit) over the checkpoint's state, ids and carried arrays (by name, in name order:
+// the order a file lists them), their bytes as stored (little-endian IEEE doubles, uint64).
+// Written with every checkpoint and verified on --resume: a flipped byte is refused.
+std::uint64_t checkpointChecksum(const Checkpoint& c);
 ResumeSource readResumeSource(const std::string& dir, const std::string& name);
 
 template <int D>

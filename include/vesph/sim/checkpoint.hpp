@@ -32,6 +32,7 @@ struct ResumeRules {
   std::string resolved_scene;  // this segment's scene, compared with the file's
   double end_time = 0;
   bool removes_leaving = false;  // checks.leave_domain = "remove"
+  double max_speed = 0;          // checks.max_speed, m/s: bounds how far a particle can have gone
 };
 
 template <int D>
@@ -83,6 +84,8 @@ class Checkpoints {
   OdeState& state_;
   std::vector<Carrier> carriers_;
   // While resuming: the file and its checkpoint (for the particle set's checks and messages).
+  void validate(const ResumeSource& src, const ResumeRules& rules) const;
+  void validatePositions(const Checkpoint& ck, const ResumeRules& rules) const;
   std::string where_;
   const Checkpoint* resuming_ = nullptr;
 };

@@ -24,6 +24,16 @@
 
 namespace vesph {
 
+// Limits `vesph check` applies so that `run` cannot fail on them later (docs/user-guide.md
+// "Exit codes"): the scene name names the output files (255 bytes per file name); the output
+// times are allocated before the run; the step floor: after an accepted step, a step under
+// kStepFloor * time.end ends the run as diverged (it would not reach the end); the viscosity's
+// bound keeps sane scenes' viscous step limit above that floor.
+inline constexpr std::size_t kMaxSceneNameBytes = 200;
+inline constexpr std::size_t kMaxOutputTimes = 1000000;
+inline constexpr double kStepFloor = 1e-12;
+inline constexpr double kMaxViscosity = 1e6;  // Pa s
+
 // The parts of a scene that do not depend on the dimension.
 struct SceneHeader {
   std::string name;

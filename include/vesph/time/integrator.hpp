@@ -124,6 +124,10 @@ class Integrator {
   // nothing: a resumed segment starts with a fresh step-size estimate.
   virtual std::vector<double> carried() const { return {}; }
   virtual void restoreCarried(const std::vector<double>& values) {}
+  // The stability limits at the last evaluation, as this integrator applies them (all infinite
+  // when it applies none: a fixed integrator.step). The run's step floor names the one that
+  // collapsed the step.
+  virtual StepLimits limits() const { return {}; }
 };
 
 // The explicit Butcher tables of SUNDIALS 6.4.1 (integrator.table), by name without the
