@@ -17,5 +17,10 @@ cmake --build build-asan
 # Left out: "isph projection: a tank at rest under gravity, ..." compares two divergence norms at
 # round-off (divergenceAfter <= divergenceBefore); at -O1 the order of the sums differs and the
 # comparison fails by round-off with no sanitizer report (it passes in the Release build).
-ctest --test-dir build-asan --output-on-failure -j 2 -E '^(cli|tools)[.]|^isph projection: a tank at rest under gravity'
+# The AMG solver's tests ("linear solvers: ...") run with the leak checker off: hypre's BoomerAMG
+# needs MPI, and OpenMPI's MPI_Init/MPI_Finalize leave allocations behind that LeakSanitizer
+# reports, some from MPI plugins already unloaded at exit (no module left to suppress them by);
+# the address and undefined-behaviour checks stay on for them.
+ctest --test-dir build-asan --output-on-failure -j 2 -E '^(cli|tools|docs)[.]|^isph projection: a tank at rest under gravity|^linear solvers'
+ASAN_OPTIONS=detect_leaks=0 ctest --test-dir build-asan --output-on-failure -R '^linear solvers'
 ctest --test-dir build-asan --output-on-failure -R '^cli[.](scene_errors|check_and_list|robustness)$'

@@ -37,7 +37,7 @@ void finaliseHypre() {
   if (!finalised) MPI_Finalize();
 }
 
-// MPI and hypre are initialised once per process, on the first AMG solver; finalised at exit.
+// MPI and hypre are initialised once per process, at the first AMG solve; finalised at exit.
 void initialiseHypre() {
   static std::once_flag once;
   std::call_once(once, [] {
@@ -61,7 +61,9 @@ double* vectorData(HYPRE_ParVector v) { return hypre_VectorData(hypre_ParVectorL
 
 class AmgKrylovSolver final : public LinearSolver {
  public:
-  explicit AmgKrylovSolver(const LinearSolverOptions& o) : options_(o), name_(o.type + "+amg") { initialiseHypre(); }
+  // MPI and hypre start at the first solve, not here: `vesph check` of an ISPH scene builds the
+  // solver without solving and never starts MPI.
+  explicit AmgKrylovSolver(const LinearSolverOptions& o) : options_(o), name_(o.type + "+amg") {}
   ~AmgKrylovSolver() override { release(); }
   AmgKrylovSolver(const AmgKrylovSolver&) = delete;
   AmgKrylovSolver& operator=(const AmgKrylovSolver&) = delete;
@@ -76,6 +78,7 @@ class AmgKrylovSolver final : public LinearSolver {
       r.ok = true;
       return r;
     }
+    initialiseHypre();
     if (pattern_changed || !matrix_ || n != size_) build(A);
     // The values (in place, through the map), and the rows that are all zero: a particle with
     // no neighbour among the unknowns, the row 0 = b_i. With b_i = 0 it is p_i = 0 (a unit
