@@ -47,13 +47,20 @@ class ParticleShifting final : public PairEffect<D, ParticleShifting<D>> {
  public:
   explicit ParticleShifting(ConfigTable& cfg)
       : coefficient_(cfg.numberIn("coefficient", 2.0, 0.0, 100.0, "A of the shifting velocity -A h U grad C")),
-        // U, a flow speed in m/s: 1e4 m/s is beyond any flow vesph resolves (an absurd U would
-        // drive the shifting step limit to zero). Read without a unit label, as before the bound,
-        // so that the missing-key message stays the one users and tests know.
-        speed_(cfg.numberAtMost("speed", std::nullopt, Bound::positive, 1e4)),
+        speed_(readSpeed(cfg)),
         tensile_(cfg.numberIn("tensile_correction", 0.2, 0.0, 10.0, "R of Lind et al.'s 1 + R (W/W(dx))^n")),
         exponent_(static_cast<int>(cfg.integer("exponent", 4, 1, 16))) {}
   std::string_view name() const override { return "particle_shifting"; }
+
+  // U, a flow speed in m/s: 1e4 m/s is beyond any flow vesph resolves (an absurd U would drive
+  // the shifting step limit to zero). The key is read without a unit label, so that the
+  // missing-key message is the one it always was; the bound's message names the unit.
+  static double readSpeed(ConfigTable& cfg) {
+    constexpr double kMaxSpeed = 1e4;
+    const double u = cfg.number("speed", std::nullopt, Bound::positive);
+    if (u > kMaxSpeed) cfg.fail("speed", "a positive number of at most 10000 (m/s)");
+    return u;
+  }
   Phase phase() const override { return Phase::forces; }
   bool needsKernelValue() const override { return true; }
   // Set up after the other force effects; the evolving fields (registered by the rates phase,
