@@ -4,6 +4,8 @@
 #include <doctest/doctest.h>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <string>
 #include <vector>
 
@@ -171,4 +173,29 @@ TEST_CASE("linear solvers: a singular or non-converging system is reported with 
   const SolveReport r = makeLinearSolver(o)->solve(A, true, Eigen::VectorXd::Ones(n), x);
   CHECK_FALSE(r.ok);
   CHECK(r.message.find("singular") != std::string::npos);
+}
+
+// Open MPI, started as a singleton, forks a daemon (orted) that inherits the process's open
+// files: the output file's HDF5 lock then outlives vesph, and a `--resume` started at once
+// finds the file locked (the failure seen in cli.resume under load). The AMG solver starts MPI
+// in isolated singleton mode: after a solve, this process has no child.
+TEST_CASE("linear solvers: starting MPI for amg forks no daemon") {
+  const int m = 10, n = m * m;
+  LinearSolverOptions o;
+  o.type = "cg";
+  o.preconditioner = "amg";
+  o.tolerance = 1e-10;
+  auto solver = makeLinearSolver(o);
+  const SparseRowMatrix A = gridOperator(m, 0.0);
+  const Eigen::VectorXd b = A * knownSolution(n);
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(n);
+  REQUIRE(solver->solve(A, true, b, x).ok);
+  std::string children;
+  for (const auto& task : std::filesystem::directory_iterator("/proc/self/task")) {
+    std::ifstream in(task.path() / "children");
+    std::string pids;
+    std::getline(in, pids);
+    children += pids;
+  }
+  CHECK_MESSAGE(children.empty(), "child processes: " << children);
 }

@@ -44,6 +44,12 @@ void initialiseHypre() {
     int initialised = 0;
     MPI_Initialized(&initialised);
     if (!initialised) {
+      // A process not started by mpirun is an MPI singleton, and Open MPI then forks a daemon
+      // (orted) that inherits every open descriptor, the output file's among them, with its
+      // HDF5 lock: after vesph exits the daemon lingers a moment holding it, and a `--resume`
+      // started at once finds the file locked. A singleton needs no daemon: the isolated mode
+      // starts none. A value the user set (or mpirun's launch) is kept.
+      setenv("OMPI_MCA_ess_singleton_isolated", "1", /*overwrite=*/0);
       int provided = 0;
       if (MPI_Init_thread(nullptr, nullptr, MPI_THREAD_FUNNELED, &provided) != MPI_SUCCESS)
         throw std::runtime_error("preconditioner = \"amg\": MPI could not be initialised (hypre needs it)");
