@@ -58,7 +58,7 @@ class ParticleShifting final : public PairEffect<D, ParticleShifting<D>> {
   static double readSpeed(ConfigTable& cfg) {
     constexpr double kMaxSpeed = 1e4;
     const double u = cfg.number("speed", std::nullopt, Bound::positive);
-    if (u > kMaxSpeed) cfg.fail("speed", "a positive number of at most 10000 (m/s)");
+    if (u > kMaxSpeed) cfg.fail("speed", "a positive number of at most " + std::to_string(static_cast<long>(kMaxSpeed)) + " (m/s)");
     return u;
   }
   Phase phase() const override { return Phase::forces; }

@@ -57,7 +57,7 @@ from vesph.checks.poiseuille import scene_parameters
 from vesph.output import Output
 
 REPO = Path(_REPO)
-DEFAULT_VESPH = REPO / "build-dev" / "vesph"
+DEFAULT_VESPH = REPO / "build" / "vesph"   # the README's build (tools/run-tests.sh, tools/demo.sh)
 DEFAULT_SCENE = REPO / "cases" / "poiseuille_newtonian.toml"
 
 # The Poiseuille case (cases/poiseuille_newtonian.toml).
