@@ -153,8 +153,10 @@ LinearSolverOptions readLinearSolverOptions(ConfigTable& cfg) {
   LinearSolverOptions o;
   // Defaults: BiCGSTAB with the AMG preconditioner, the fastest choice measured from 10 000 to
   // 1 000 000 unknowns and the one every ISPH test passes with (docs/performance.md, "ISPH
-  // pressure solve with algebraic multigrid"); a new hierarchy every solve (amg_setup_interval
-  // = 1) until the kept one has been run through the free-surface tests too.
+  // pressure solve with algebraic multigrid"); the hierarchy kept for up to 10 solves while the
+  // pattern holds (amg_setup_interval): the same iterations as a new one every solve on the
+  // tank and the die swell, at half the solve time (a failed solve with a kept hierarchy is
+  // retried with a new one, src/isph/amg_solver.cpp).
   o.type = cfg.choice("linear_solver", "bicgstab", {"umfpack", "klu", "bicgstab", "cg", "gmres"});
   if (isKrylov(o.type)) {
     o.preconditioner = cfg.choice("preconditioner", "amg", {"diagonal", "ilut", "amg"});
@@ -166,7 +168,7 @@ LinearSolverOptions readLinearSolverOptions(ConfigTable& cfg) {
     }
     if (o.type == "gmres") o.gmres_restart = static_cast<int>(cfg.integer("gmres_restart", 30, 1, 10000));
     if (o.preconditioner == "amg") {
-      o.amg_setup_interval = static_cast<int>(cfg.integer("amg_setup_interval", 1, 1, 1000000));
+      o.amg_setup_interval = static_cast<int>(cfg.integer("amg_setup_interval", 10, 1, 1000000));
       o.amg_strong_threshold = cfg.numberIn("amg_strong_threshold", 0.25, 0.0, 1.0);
     }
   } else {

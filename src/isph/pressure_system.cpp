@@ -130,44 +130,53 @@ void GradientRows<D>::build(StepContext<D>& sys, GradientForm form, WallPressure
   const double* rho = P.density.data();
   const bool walls_enter = walls == WallPressures::enter;
   using Mat = Eigen::Matrix<double, D, D>;
+  const int threads = n >= kParallelMinimum ? omp_get_max_threads() : 1;
+  if (pairs_.size() < static_cast<std::size_t>(threads)) pairs_.resize(static_cast<std::size_t>(threads));
   sys.kernel.visit([&](auto shape) {
-#pragma omp parallel for schedule(static) if (n >= kParallelMinimum)
-    for (std::size_t k = 0; k < n; ++k) {
-      const std::size_t e0 = list.start[k] + k;
-      // Renormalisation M_k = -sum_j V_j F r r^T (identity for the plain forms).
-      Mat Minv = Mat::Identity();
-      if (form == GradientForm::renormalised) {
-        Mat M = Mat::Zero();
-        pairs.visit(shape, k, list.start[k], list.start[k + 1],
-                    [&](std::size_t, std::size_t j, const Vec<D>& rkj, double, double F) {
-                      M -= (m[j] / rho[j] * F) * rkj * rkj.transpose();
-                    });
-        Minv = renormalisationInverse<D>(M);
+#pragma omp parallel num_threads(threads)
+    {
+      std::vector<PairGeometry>& inside = pairs_[static_cast<std::size_t>(omp_get_thread_num())];
+#pragma omp for schedule(static)
+      for (std::size_t k = 0; k < n; ++k) {
+        const std::size_t e0 = list.start[k] + k;
+        // entry e of k's row for the list entry c: e0 + 1 + (c - start[k])
+        const std::size_t shift = e0 + 1 - list.start[k];
+        // The pairs inside the support (their geometry evaluated once); the candidates outside
+        // it get coefficient 0.
+        inside.clear();
+        pairs.visit(
+            shape, k, list.start[k], list.start[k + 1],
+            [&](std::size_t c, std::size_t j, const Vec<D>& rkj, double, double F) {
+              inside.push_back({c + shift, j, rkj, F});
+            },
+            [&](std::size_t c) {
+              const std::size_t e = c + shift;
+              index[e] = static_cast<Index>(list.nbr[c]);
+              coef[e].setZero();
+            });
+        // Renormalisation M_k = -sum_j V_j F r r^T (identity for the plain forms).
+        Mat Minv = Mat::Identity();
+        if (form == GradientForm::renormalised) {
+          Mat M = Mat::Zero();
+          for (const PairGeometry& g : inside) M -= (m[g.j] / rho[g.j] * g.F) * g.rkj * g.rkj.transpose();
+          Minv = renormalisationInverse<D>(M);
+        }
+        Vec<D> self = Vec<D>::Zero();
+        const double rhok = rho[k];
+        for (const PairGeometry& g : inside) {
+          const std::size_t j = g.j;
+          index[g.entry] = static_cast<Index>(j);
+          if (form == GradientForm::symmetric) {  // thesis eq. (3.18)
+            coef[g.entry] = walls_enter || j < n ? Vec<D>((m[j] / (rho[j] * rho[j]) * g.F) * g.rkj) : Vec<D>::Zero();
+            self += (m[j] / (rhok * rhok) * g.F) * g.rkj;
+          } else {  // thesis eq. (3.17), renormalised or not
+            coef[g.entry] = (m[j] / rho[j] * g.F / rhok) * (Minv * g.rkj);
+            self -= coef[g.entry];
+          }
+        }
+        index[e0] = static_cast<Index>(k);
+        coef[e0] = self;
       }
-      Vec<D> self = Vec<D>::Zero();
-      const double rhok = rho[k];
-      // entry e of k's row for the list entry c: e0 + 1 + (c - start[k])
-      const std::size_t shift = e0 + 1 - list.start[k];
-      pairs.visit(
-          shape, k, list.start[k], list.start[k + 1],
-          [&](std::size_t c, std::size_t j, const Vec<D>& rkj, double, double F) {
-            const std::size_t e = c + shift;
-            index[e] = static_cast<Index>(j);
-            if (form == GradientForm::symmetric) {  // thesis eq. (3.18)
-              coef[e] = walls_enter || j < n ? Vec<D>((m[j] / (rho[j] * rho[j]) * F) * rkj) : Vec<D>::Zero();
-              self += (m[j] / (rhok * rhok) * F) * rkj;
-            } else {  // thesis eq. (3.17), renormalised or not
-              coef[e] = (m[j] / rho[j] * F / rhok) * (Minv * rkj);
-              self -= coef[e];
-            }
-          },
-          [&](std::size_t c) {
-            const std::size_t e = c + shift;
-            index[e] = static_cast<Index>(list.nbr[c]);
-            coef[e].setZero();
-          });
-      index[e0] = static_cast<Index>(k);
-      coef[e0] = self;
     }
   });
 }
@@ -213,20 +222,16 @@ void PressureSystem<D>::assemble(StepContext<D>& sys, double dt, LaplacianForm f
       rb.cols.clear();
       rb.vals.clear();
       rb.lengths.clear();
-      std::vector<std::pair<int, double>> sorted;
       const std::size_t r0 = rows * t / nt, r1 = rows * (t + 1) / nt;
-      // Sort the row by column; reset the slots.
+      // Sort the row by column (the values follow through the slots, which are then reset).
       auto finishRow = [&](std::size_t row_begin) {
         const std::size_t len = rb.cols.size() - row_begin;
-        sorted.resize(len);
-        for (std::size_t q = 0; q < len; ++q) {
-          sorted[q] = {rb.cols[row_begin + q], rb.vals[row_begin + q]};
-          rb.slot[static_cast<std::size_t>(rb.cols[row_begin + q])] = -1;
-        }
-        std::sort(sorted.begin(), sorted.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
-        for (std::size_t q = 0; q < len; ++q) {
-          rb.cols[row_begin + q] = sorted[q].first;
-          rb.vals[row_begin + q] = sorted[q].second;
+        rb.row_vals.assign(rb.vals.begin() + static_cast<std::ptrdiff_t>(row_begin), rb.vals.end());
+        std::sort(rb.cols.begin() + static_cast<std::ptrdiff_t>(row_begin), rb.cols.end());
+        for (std::size_t q = row_begin; q < rb.cols.size(); ++q) {
+          int& s = rb.slot[static_cast<std::size_t>(rb.cols[q])];
+          rb.vals[q] = rb.row_vals[static_cast<std::size_t>(s) - row_begin];
+          s = -1;
         }
         rb.lengths.push_back(static_cast<int>(len));
       };

@@ -67,6 +67,18 @@ struct GradientRows {
   std::vector<Vec<D>> coef;
 
   void build(StepContext<D>& sys, GradientForm form, WallPressures walls);
+
+ private:
+  // One pair inside the support, kept between the two passes of build() (the renormalisation
+  // matrix, then the coefficients) so that the kernel is evaluated once per pair.
+  struct PairGeometry {
+    std::size_t entry, j;
+    Vec<D> rkj;
+    double F;
+  };
+  std::vector<std::vector<PairGeometry>> pairs_;  // per thread, reused from step to step
+
+ public:
   // (G p)_k; with p_old, (G (p - p_old))_k.
   Vec<D> at(const NeighbourList<D>& list, std::size_t k, const double* p, const double* p_old = nullptr) const {
     Vec<D> a = Vec<D>::Zero();
@@ -146,6 +158,7 @@ class PressureSystem {
     std::vector<int> slot;  // column -> position in cols (or -1)
     std::vector<int> cols, lengths;
     std::vector<double> vals;
+    std::vector<double> row_vals;  // one row's values while its columns are sorted
   };
   std::vector<RowBuffer> rows_;
   Eigen::VectorXd rhs_;

@@ -32,7 +32,7 @@ struct LinearSolverOptions {
   double ilut_drop_tolerance = 1e-4;        // ilut: entries below this times the row norm are dropped
   int ilut_fill_factor = 10;                // ilut: fill-in per row relative to the matrix
   int gmres_restart = 30;                   // gmres: Krylov vectors kept before a restart
-  int amg_setup_interval = 1;               // amg: solves that share one hierarchy (pattern unchanged)
+  int amg_setup_interval = 1;               // amg: solves that share one hierarchy (pattern unchanged; scenes default to 10)
   double amg_strong_threshold = 0.25;       // amg: BoomerAMG's strength of connection
 };
 
