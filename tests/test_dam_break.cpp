@@ -125,8 +125,10 @@ TEST_CASE("gauges on the hydrostatic column: point pressure, elevation, front") 
   const auto rows = gauges.evaluate(0.25, sys.particles, sys.kernel, sys.domain);
   REQUIRE(rows.size() == 4);
   CHECK(rows[0][0] == 0.25);
-  // A linear pressure on a symmetric lattice: the Shepard interpolation is exact to rounding.
-  CHECK(rows[0][1] == doctest::Approx(kRho0 * kG * (kH - 1.0)).epsilon(1e-9));
+  // A linear pressure on a lattice symmetric about the point: the Shepard interpolation would be
+  // exact with equal volumes; the volumes m/rho_j vary with depth by (dp/dy) dx / c0^2 ~ 5e-5
+  // across a support, which weights the deeper side more: measured 1e-6 relative.
+  CHECK(rows[0][1] == doctest::Approx(kRho0 * kG * (kH - 1.0)).epsilon(1e-5));
   CHECK(rows[0][2] == 0.0);
   CHECK(rows[0][5] == doctest::Approx(1.0).epsilon(0.02));  // a full support: kernel sum ~ 1
   // The surface at H = 2 m within a quarter spacing; a dry foot gives NaN; the front is the
