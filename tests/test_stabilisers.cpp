@@ -151,7 +151,7 @@ TEST_CASE("artificial viscosity: one pair, approaching and separating, against e
 TEST_CASE("artificial viscosity: zero for a uniform velocity and for an expanding block") {
   const double dx = 0.01;
   {
-    Box<2> b("[effects.artificial_viscosity]\n", dx, 1.6, KernelType::quintic, 24 * dx, true);
+    Box<2> b("[effects.artificial_viscosity]\nalpha = 1.0\nbeta = 2.0\n", dx, 1.6, KernelType::quintic, 24 * dx, true);
     b.lattice(24, [](const Vec<2>&) { return Vec<2>(0.4, -0.25); });
     std::mt19937_64 rng(3);
     disorder(b, rng, 0.0, 0.03);
@@ -163,7 +163,7 @@ TEST_CASE("artificial viscosity: zero for a uniform velocity and for an expandin
     CHECK(worst == 0.0);
   }
   {  // v = gamma x: every pair separates (v_ij . x_ij = gamma r^2 > 0)
-    Box<2> b("[effects.artificial_viscosity]\n", dx, 1.6, KernelType::quintic, 1.0, false);
+    Box<2> b("[effects.artificial_viscosity]\nalpha = 1.0\nbeta = 2.0\n", dx, 1.6, KernelType::quintic, 1.0, false);
     b.lattice(20, [](const Vec<2>& x) { return Vec<2>(2.0 * x); });
     b.finish();
     b.evaluate();
@@ -217,7 +217,7 @@ void avConservation(Box<D>& b, std::mt19937_64& rng) {
 TEST_CASE("artificial viscosity: conserves momentum and dissipates kinetic energy on a disordered periodic set") {
   std::mt19937_64 rng(11);
   {
-    Box<2> b("[effects.artificial_viscosity]\n", 0.01, 1.5, KernelType::quintic, 24 * 0.01, true);
+    Box<2> b("[effects.artificial_viscosity]\nalpha = 1.0\nbeta = 2.0\n", 0.01, 1.5, KernelType::quintic, 24 * 0.01, true);
     b.lattice(24, [](const Vec<2>&) { return Vec<2>::Zero(); });
     avConservation(b, rng);
   }

@@ -1,5 +1,5 @@
 // The `vesph` command (docs/user-guide.md §2 "Command line"):
-//   vesph run SCENE.toml [-o DIR] [--set KEY=VALUE]... [--quiet] [--resume]
+//   vesph run SCENE.toml [-o DIR] [--set KEY=VALUE]... [--quiet] [--resume] [--threads N]
 //   vesph check SCENE.toml [--set KEY=VALUE]...
 //   vesph list [--json]
 //   vesph bench SCENE.toml [--steps N] [--threads LIST] [--set KEY=VALUE]...
@@ -223,6 +223,7 @@ int main(int argc, char** argv) {
   bool quiet = false, resume = false;
   std::uint64_t steps = 20;
   std::vector<int> threads;
+  int run_threads = 0;  // 0: OpenMP's default (OMP_NUM_THREADS, else every core)
   int repeat = 3;
 
   auto* run = app.add_subcommand("run", "run a scene, writing DIR/<name>.h5, .xdmf and summary.json");
@@ -233,6 +234,10 @@ int main(int argc, char** argv) {
   run->add_flag("--resume", resume,
                 "go on from the last frame of the run in DIR (its checkpoint), appending to its files; only [time], "
                 "[output], [checks] and [integrator] may differ from that run's scene");
+  // Up to 4096 threads: beyond any machine's cores, while a typo (--threads 40000) is refused.
+  run->add_option("--threads", run_threads,
+                  "OpenMP threads for the run (default: OMP_NUM_THREADS, else every core); 1 to 4096")
+      ->check(CLI::Range(1, 4096));
 
   auto* check = app.add_subcommand("check", "validate a scene and print it with every default resolved");
   check->add_option("scene", scene, "scene file (TOML)")->required();
@@ -267,6 +272,7 @@ int main(int argc, char** argv) {
       loadScene(scene, sets, h);
       return h.dimension == 2 ? benchScene<2>(scene, sets, steps, threads, repeat) : benchScene<3>(scene, sets, steps, threads, repeat);
     }
+    if (run_threads > 0) omp_set_num_threads(run_threads);
     Config cfg = loadScene(scene, sets, h);
     if (app.got_subcommand("check")) return h.dimension == 2 ? checkScene<2>(cfg, h) : checkScene<3>(cfg, h);
     return h.dimension == 2 ? runScene<2>(cfg, h, out_dir, quiet, resume) : runScene<3>(cfg, h, out_dir, quiet, resume);

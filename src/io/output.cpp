@@ -31,7 +31,7 @@ hid_t strongCloseAccess() {
 template <int D>
 OutputWriter<D>::OutputWriter(const std::string& dir, const std::string& name, const FileAttributes& attrs,
                               double resume_time)
-    : dir_(dir), name_(name), extra_columns_(attrs.extra_columns) {
+    : dir_(dir), name_(name), extra_columns_(attrs.extra_columns), gauges_(attrs.gauges) {
   h5_path_ = (std::filesystem::path(dir) / (name + ".h5")).string();
   xdmf_path_ = (std::filesystem::path(dir) / (name + ".xdmf")).string();
   startHdf5();
@@ -101,6 +101,7 @@ void OutputWriter<D>::reopen(const FileAttributes& attrs, double resume_time) {
     hsize_t size[1] = {diag_rows_};
     check(H5Dset_extent(d, size), "truncate diagnostics");
   }
+  truncateGauges(resume_time);
   flush("the truncated diagnostics");
   writeXdmf();
 }
@@ -157,7 +158,7 @@ void OutputWriter<D>::writeCheckpoint(const Checkpoint& c) {
 
 template <int D>
 OutputWriter<D>::OutputWriter(const std::string& dir, const std::string& name, const FileAttributes& attrs)
-    : dir_(dir), name_(name), extra_columns_(attrs.extra_columns) {
+    : dir_(dir), name_(name), extra_columns_(attrs.extra_columns), gauges_(attrs.gauges) {
   if (extra_columns_.size() > kMaxExtraDiagnostics) throw std::logic_error("too many extra diagnostics columns");
   std::filesystem::create_directories(dir);
   h5_path_ = (std::filesystem::path(dir) / (name + ".h5")).string();
@@ -188,6 +189,7 @@ OutputWriter<D>::OutputWriter(const std::string& dir, const std::string& name, c
     std::vector<const char*> columns(std::begin(kDiagColumns), std::end(kDiagColumns));
     for (const std::string& c : extra_columns_) columns.push_back(c.c_str());
     for (const char* col : columns) H5Dclose(createExtensible(diag, col, H5T_IEEE_F64LE, 4096));
+    createGauges();
   } catch (...) {
     close();
     throw;

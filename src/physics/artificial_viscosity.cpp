@@ -34,10 +34,13 @@ template <int D>
 class ArtificialViscosity final : public PairEffect<D, ArtificialViscosity<D>> {
  public:
   explicit ArtificialViscosity(ConfigTable& cfg)
-      // Monaghan's alpha and beta are O(1) (Fang et al. take 1 and 2); the limit of 100 keeps an
-      // absurd value from driving the viscous step limit to zero.
-      : alpha_(cfg.numberAtMost("alpha", 1.0, Bound::nonnegative, 100.0)),
-        beta_(cfg.numberAtMost("beta", 2.0, Bound::nonnegative, 100.0)),
+      // The defaults are the usual ones for water (DualSPHysics' alpha = 0.01 with no beta term,
+      // Crespo et al. 2015 §3.2): Monaghan's O(1) values (Fang et al. take alpha = 1, beta = 2 for
+      // their drops, whose scenes state them) damp a water flow at c ~ 10-100 m/s about a hundred
+      // times too much (docs/theory.md "Artificial viscosity"). The limit of 100 keeps an absurd
+      // value from driving the viscous step limit to zero.
+      : alpha_(cfg.numberAtMost("alpha", 0.01, Bound::nonnegative, 100.0)),
+        beta_(cfg.numberAtMost("beta", 0.0, Bound::nonnegative, 100.0)),
         signal_speed_(cfg.optionalNumber("sound_speed", Bound::positive, "m/s")) {}
   std::string_view name() const override { return "artificial_viscosity"; }
   Phase phase() const override { return Phase::forces; }

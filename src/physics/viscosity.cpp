@@ -23,6 +23,10 @@ class Viscosity final : public PairEffect<D, Viscosity<D>> {
   Phase phase() const override { return Phase::forces; }
 
   void setup(Setup<D>& s) override {
+    // fluid.viscosity defaults to 0 (an inviscid scene needs none): this term needs it set.
+    if (!(s.viscosity > 0))
+      throw InputError("effects.viscosity needs the viscosity mu: set fluid.viscosity > 0 (Pa s), or remove "
+                       "[effects.viscosity] for an inviscid fluid");
     mu_ = s.viscosity;
     nu_ = s.viscosity / s.rest_density;
     wall_velocity_ = s.particles.fields.find("wall_velocity");

@@ -33,6 +33,8 @@ struct Block {
   double normal_sign = 1;
   bool centroid = false;   // image wall: extrapolate from the centroid of P's weights
   double pressure_floor = -std::numeric_limits<double>::infinity();  // dummy wall, Pa
+  bool hydrostatic = false;              // fluid: hydrostatic initial density
+  std::optional<double> surface_height;  // its free surface, m along -g (absent: the block's top)
 };
 
 template <int D>
@@ -51,6 +53,15 @@ class BlockReader {
       // [-jitter/2, jitter/2] dx per axis; the mass stays rho0 dx^D.
       block.jitter = b.numberIn("jitter", 0.0, 0.0, 0.5, "of the particle spacing");
       block.seed = static_cast<std::uint64_t>(b.integer("seed", 1, 0, 1LL << 62));
+      // Read only when present: the resolved scenes of existing cases stay as they were.
+      if (b.has("hydrostatic")) block.hydrostatic = b.boolean("hydrostatic", false);
+      if (b.has("surface_height")) {
+        if (!block.hydrostatic) b.fail("surface_height", "no surface_height without hydrostatic = true");
+        block.surface_height = b.number("surface_height", std::nullopt, Bound::any, "m");
+      }
+    } else {
+      for (const char* key : {"hydrostatic", "surface_height"})
+        if (b.has(key)) b.fail(key, "no " + std::string(key) + " on a wall block (a fluid block's initial density)");
     }
     if (shape != "box") {
       if (kind != "fluid") b.fail("shape", "\"box\" for a wall block (walls are boxes of layers)");
@@ -181,12 +192,14 @@ class LatticePlacer {
   LatticePlacer(const LatticeGeometry<D>& g, ParticleSet<D>& p, std::vector<WallPoint<D>>& wall_points)
       : g_(g), p_(p), wall_points_(wall_points), mass_(g.rest_density * std::pow(g.spacing, D)) {}
 
-  void place(const std::vector<Block<D>>& blocks) {
+  void place(const std::vector<Block<D>>& blocks, std::vector<HydrostaticBlock<D>>* hydrostatic) {
     for (ParticleKind pass : {ParticleKind::fluid, ParticleKind::wall})
       for (const Block<D>& b : blocks) {
         if (b.kind != pass) continue;
+        const std::size_t first = p_.size();
         if (b.disk) placeRound(b);
         else placeBox(b, pass);
+        if (b.hydrostatic && hydrostatic) hydrostatic->push_back({first, p_.size(), b.lo, b.hi, b.surface_height, b.path});
       }
   }
 
@@ -291,7 +304,7 @@ class LatticePlacer {
 
 template <int D>
 std::vector<WallPoint<D>> generateParticles(ConfigTable& root, const LatticeGeometry<D>& geometry,
-                                            ParticleSet<D>& particles) {
+                                            ParticleSet<D>& particles, std::vector<HydrostaticBlock<D>>* hydrostatic) {
   const Vec<D> v0 = root.table("initial").vector<D>("velocity", Vec<D>::Zero(), "m/s");
   auto tables = root.tableArray("blocks");
   if (tables.empty()) root.fail("blocks", "at least one [[blocks]] table with kind, min and max");
@@ -302,7 +315,10 @@ std::vector<WallPoint<D>> generateParticles(ConfigTable& root, const LatticeGeom
   checkParticleCount(blocks, geometry);
 
   std::vector<WallPoint<D>> wall_points;
-  LatticePlacer<D>(geometry, particles, wall_points).place(blocks);
+  if (!hydrostatic)
+    for (const Block<D>& b : blocks)
+      if (b.hydrostatic) throw InputError(geometry.file + ": " + b.path + ".hydrostatic: not available here");
+  LatticePlacer<D>(geometry, particles, wall_points).place(blocks, hydrostatic);
   if (particles.n_moving == 0) root.fail("blocks", "at least one block of kind \"fluid\"");
   // Scenes without image walls or pressure floors keep no per-wall-particle record
   // (DummyWalls treats an empty one as all dummy layers without a floor).
@@ -332,8 +348,42 @@ void markWallLayers(ParticleSet<D>& p, const NeighbourList<D>& list, const Domai
   }
 }
 
-template std::vector<WallPoint<2>> generateParticles<2>(ConfigTable&, const LatticeGeometry<2>&, ParticleSet<2>&);
-template std::vector<WallPoint<3>> generateParticles<3>(ConfigTable&, const LatticeGeometry<3>&, ParticleSet<3>&);
+template <int D>
+void applyHydrostaticDensity(const std::vector<HydrostaticBlock<D>>& blocks, const PressureModel* model,
+                             const Vec<D>& body_acceleration, double rest_density, const std::string& file,
+                             ParticleSet<D>& particles) {
+  for (const HydrostaticBlock<D>& b : blocks) {
+    if (!model)
+      throw InputError(file + ": " + b.path + ".hydrostatic: needs an equation of state to give the density of the "
+                       "hydrostatic pressure (add [effects.equation_of_state]; ISPH solves its pressure itself)");
+    const double g = body_acceleration.norm();
+    if (!(g > 0))
+      throw InputError(file + ": " + b.path + ".hydrostatic: needs a body acceleration (add [effects.body_force])");
+    const Vec<D> up = -body_acceleration / g;
+    // The block's top along -g: the highest corner of its box (a disk's or sphere's bounding box).
+    double top = -1e300;
+    for (int corner = 0; corner < (1 << D); ++corner) {
+      Vec<D> x;
+      for (int a = 0; a < D; ++a) x[a] = (corner >> a) & 1 ? b.hi[a] : b.lo[a];
+      top = std::max(top, x.dot(up));
+    }
+    const double surface = b.surface_height.value_or(top);
+    const double p_surface = model->pressure(rest_density);  // the free surface keeps rho0
+    for (std::size_t i = b.first; i < b.last; ++i) {
+      const double depth = surface - Vec<D>(particles.x(i)).dot(up);
+      particles.density[i] = model->densityFor(p_surface + rest_density * g * depth);
+    }
+  }
+}
+
+template std::vector<WallPoint<2>> generateParticles<2>(ConfigTable&, const LatticeGeometry<2>&, ParticleSet<2>&,
+                                                        std::vector<HydrostaticBlock<2>>*);
+template std::vector<WallPoint<3>> generateParticles<3>(ConfigTable&, const LatticeGeometry<3>&, ParticleSet<3>&,
+                                                        std::vector<HydrostaticBlock<3>>*);
+template void applyHydrostaticDensity<2>(const std::vector<HydrostaticBlock<2>>&, const PressureModel*, const Vec<2>&,
+                                         double, const std::string&, ParticleSet<2>&);
+template void applyHydrostaticDensity<3>(const std::vector<HydrostaticBlock<3>>&, const PressureModel*, const Vec<3>&,
+                                         double, const std::string&, ParticleSet<3>&);
 template void markWallLayers<2>(ParticleSet<2>&, const NeighbourList<2>&, const Domain<2>&, double);
 template void markWallLayers<3>(ParticleSet<3>&, const NeighbourList<3>&, const Domain<3>&, double);
 

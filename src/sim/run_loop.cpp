@@ -71,7 +71,7 @@ std::unique_ptr<OutputWriter<D>> RunLoop<D>::openWriter() const {
   if (opt_.output_dir.empty()) return nullptr;
   const SphSystem<D>& sys = sim_.system_;
   const FileAttributes attrs{D, sim_.resolved_scene_, sim_.dx_, sys.kernel.h, std::string(kernelName(sys.kernel.type)),
-                             StepChecks<D>::hookColumns(sys)};
+                             StepChecks<D>::hookColumns(sys), sim_.gauges_.series()};
   return opt_.resume ? std::make_unique<OutputWriter<D>>(opt_.output_dir, sim_.header_.name, attrs, t0_)
                      : std::make_unique<OutputWriter<D>>(opt_.output_dir, sim_.header_.name, attrs);
 }
@@ -111,6 +111,9 @@ bool RunLoop<D>::writeFrame(double t, bool only_if_finite) {
     throw NumericalFailure(os.str());
   }
   last_frame_time_ = t;
+  // The gauges from the frame's particle set (its pressure from the evaluation above).
+  if (!sim_.gauges_.empty())
+    writer_->appendGauges(sim_.gauges_.evaluate(t, sim_.system_.particles, sim_.system_.kernel, sim_.system_.domain));
   writer_->writeFrame(t, static_cast<std::int64_t>(steps_), sim_.system_.particles, pending_);
   pending_.clear();
   writer_->writeCheckpoint(sim_.checkpoints_.at(t, totals(t)));

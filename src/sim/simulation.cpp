@@ -62,8 +62,9 @@ Simulation<D>::Simulation(Config& config, const SceneHeader& header) : config_(c
   root.markRead("name");
   root.markRead("dimension");
   readDomainKernelFluid(root);
+  std::vector<HydrostaticBlock<D>> hydrostatic_blocks;
   wall_points_ = generateParticles(root, LatticeGeometry<D>{config.file(), dx_, rho0_, system_.domain, system_.kernel},
-                                   system_.particles);
+                                   system_.particles, &hydrostatic_blocks);
   // Walls, open boundaries (an inflow buffer of fixed particles, an outflow plane), domain exit.
   BoundaryBuild<D> boundaries{root, system_.particles, system_.domain, dx_, rho0_, system_.kernel.supportRadius(),
                               wall_points_, {}, {}, {}};
@@ -84,6 +85,10 @@ Simulation<D>::Simulation(Config& config, const SceneHeader& header) : config_(c
     throw InputError(config.file() + ": " + e.what());
   }
   markWallLayers(system_.particles, system_.neighbours, system_.domain, dx_);
+  // The equation of state and the body acceleration are known once the system is set up.
+  if (!hydrostatic_blocks.empty())
+    applyHydrostaticDensity(hydrostatic_blocks, system_.pressureModel(), system_.bodyAcceleration(), rho0_,
+                            config.file(), system_.particles);
 
   const ReferenceScales scales = referenceScales(boundaries.facts.prescribed_peak_speed);
   ConfigTable integ = root.table("integrator");
@@ -98,6 +103,7 @@ Simulation<D>::Simulation(Config& config, const SceneHeader& header) : config_(c
   }
   integrator_name_ = integrator_->name();
   readChecks(root, scales.velocity, boundaries.facts.removes_leaving);
+  gauges_.read(root, system_.domain, dx_);
 
   config.rejectUnknownKeys();
   resolved_scene_ = config.resolvedToml();
@@ -130,8 +136,9 @@ void Simulation<D>::readDomainKernelFluid(ConfigTable& root) {
   ConfigTable fluid = root.table("fluid", false);
   rho0_ = fluid.number("density", std::nullopt, Bound::positive, "kg/m^3");
   // Bounded so that the viscous step limit h^2 rho / (8 mu) of a sane scene stays above the step
-  // floor (docs/user-guide.md "Exit codes"); 1e6 Pa s is beyond bitumen's viscosity.
-  mu_ = fluid.numberAtMost("viscosity", std::nullopt, Bound::nonnegative, kMaxViscosity, "Pa s");
+  // floor (docs/user-guide.md "Exit codes"); 1e6 Pa s is beyond bitumen's viscosity. 0 (the
+  // default) for an inviscid fluid; the terms that need mu > 0 say so at setup.
+  mu_ = fluid.numberAtMost("viscosity", 0.0, Bound::nonnegative, kMaxViscosity, "Pa s");
 }
 
 template <int D>
@@ -231,8 +238,21 @@ std::string Simulation<D>::describe() const {
   for (const auto& hk : system_.hooks) os << hk->describe();
   os << "# integrator " << integrator_name_ << "; output at " << output_times_.size() << " times up to "
      << t_end_ << " s\n";
-  os << "# stability inputs: h = " << s.h << " m, c = " << s.sound_speed << " m/s, nu = " << s.kinematic_viscosity
-     << " m^2/s, |g| = " << system_.bodyAcceleration().norm() << " m/s^2\n";
+  // The viscous step limit takes the largest diffusivity of the effects: the kinematic viscosity
+  // nu of the viscous terms, the artificial viscosity's alpha c h / (2 (D + 2)), the density
+  // diffusion's delta h c (a diffusivity of density, not a viscosity): each named by its effect.
+  os << "# stability inputs: h = " << s.h << " m, c = " << s.sound_speed << " m/s, largest diffusivity "
+     << s.kinematic_viscosity << " m^2/s, |g| = " << system_.bodyAcceleration().norm() << " m/s^2\n";
+  for (const auto& e : system_.effects) {
+    StabilityInputs own;
+    e->stability(own);
+    if (own.kinematic_viscosity > 0)
+      os << "#   diffusivity of " << e->name() << ": " << own.kinematic_viscosity << " m^2/s"
+         << (e->name() == "density_diffusion" ? " (density diffusion delta h c)"
+             : e->name() == "artificial_viscosity" ? " (equivalent viscosity alpha c h / (2 (D + 2)))"
+                                                   : " (kinematic viscosity nu)")
+         << "\n";
+  }
   return os.str();
 }
 

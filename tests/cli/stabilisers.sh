@@ -13,18 +13,19 @@ run_ok() {  # run_ok NAME SCENE --set ...: runs to the end and writes a valid fi
   $PY "$SRC/tools/check_output.py" "$WORK/$name" >"$WORK/$name.log" 2>&1 && pass ||
     fail "$name: output not valid: $(tail -3 "$WORK/$name.log")"
 }
-run_ok av "$S" --set 'effects.artificial_viscosity.alpha=1.0'
+run_ok av "$S" --set 'effects.artificial_viscosity.alpha=1.0' --set 'effects.artificial_viscosity.beta=2.0'
 run_ok xsph "$S" --set 'effects.xsph.epsilon=0.5'
 run_ok xsph_normalised "$S" --set 'effects.xsph.form="normalised"'
 run_ok as "$S" --set 'effects.artificial_stress.epsilon=0.3' --set 'effects.equation_of_state.reference_pressure=-1e-5'
-run_ok all "$S" --set 'effects.artificial_viscosity={}' --set 'effects.xsph={}' --set 'effects.artificial_stress={}'
-run_ok as_oldroyd_b "$OB" --set 'effects.artificial_stress={}' --set 'effects.artificial_viscosity={}'
+run_ok all "$S" --set 'effects.artificial_viscosity={ alpha = 1.0, beta = 2.0 }' --set 'effects.xsph={}' --set 'effects.artificial_stress={}'
+run_ok as_oldroyd_b "$OB" --set 'effects.artificial_stress={}' --set 'effects.artificial_viscosity={ alpha = 1.0, beta = 2.0 }'
 run_ok shifting "$S" --set 'effects.particle_shifting.speed=0.01'
 run_ok surface_pressure_oldroyd_b "$OB" --set 'effects.free_surface={}' --set 'effects.surface_pressure={}'
 run_ok shifting_oldroyd_b "$OB" --set 'effects.particle_shifting.speed=0.01' --set 'effects.particle_shifting.coefficient=1.0'
 
 # defaults shown by check
-expect 0 "artificial_viscosity = \{ alpha = 1.0, beta = 2.0 \}" -- "$VESPH" check "$S" --set 'effects.artificial_viscosity={}'
+# the water defaults (DualSPHysics' alpha = 0.01, no beta term; Fang's drops state alpha = 1, beta = 2)
+expect 0 "artificial_viscosity = \{ alpha = 0.01, beta = 0.0 \}" -- "$VESPH" check "$S" --set 'effects.artificial_viscosity={}'
 expect 0 "artificial_stress = \{ epsilon = 0.2[0-9]*, exponent = 4 \}" -- "$VESPH" check "$S" --set 'effects.artificial_stress={}'
 expect 0 "xsph = \{ epsilon = 0.5, form = 'monaghan' \}" -- "$VESPH" check "$S" --set 'effects.xsph={}'
 expect 0 "coefficient = 2.0" -- "$VESPH" check "$S" --set 'effects.particle_shifting.speed=0.01'

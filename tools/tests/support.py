@@ -27,6 +27,7 @@ What each module checks is in its docstring:
     test_measure_drop.py        drop_measure
     test_measure_hydrostatic.py hydrostatic_check
     test_measure_die_swell.py   die_swell_measure, die_swell_lip
+    test_measure_dam_break.py   dam_break_front, Output.gauges()
     test_studies.py             die_swell_study
 """
 

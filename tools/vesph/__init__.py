@@ -9,7 +9,7 @@ Modules
     limits       the explicit step limits with the C++ default coefficients
     analytic     Poiseuille start-up, Waters & King, second-order fluid channel, XPP shear
     checks.*     validation checks against analytic solutions, the output format checker
-    measure.*    drop impact, die swell, channel profiles, inflow, hydrostatic tank
+    measure.*    drop impact, die swell, channel profiles, inflow, hydrostatic tank, dam-break front
     studies.*    parameter studies that run vesph (work-precision, CFL, sound speed,
                  convergence, die swell, ISPH linear solvers)
 
@@ -32,6 +32,7 @@ TOOL_MODULES = {
     "hydrostatic_check": "vesph.measure.hydrostatic",
     "inflow_check": "vesph.measure.inflow",
     "drop_measure": "vesph.measure.drop",
+    "dam_break_front": "vesph.measure.dam_break",
     "die_swell_measure": "vesph.measure.die_swell",
     "die_swell_lip": "vesph.measure.die_swell_lip",
     "startup_channel_profiles": "vesph.measure.channel_profiles",
@@ -41,6 +42,7 @@ TOOL_MODULES = {
     "study_convergence": "vesph.studies.convergence",
     "die_swell_study": "vesph.studies.die_swell",
     "isph_bench": "vesph.studies.isph_bench",
+    "peer_dam_break": "vesph.studies.peer_dam_break",
 }
 
 

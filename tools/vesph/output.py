@@ -103,6 +103,18 @@ def _expected_shape(name, n, dim):
     return (n,)
 
 
+class Gauge:
+    """One gauge's series (Output.gauges): type, position (m, or None) and columns."""
+
+    def __init__(self, type_, position, columns):
+        self.type = type_
+        self.position = position
+        self.columns = columns
+
+    def __getitem__(self, column):
+        return self.columns[column]
+
+
 class Output:
     """One vesph-1 output file: its header (the resolved scene, dim, dx, h, kernel), its frame
     list (name, time) in time order, and the frames' datasets.
@@ -226,6 +238,31 @@ class Output:
             if c not in d:
                 raise ToolError(f"{self.path}: the diagnostics have no column {c!r}")
         return [d[c][...] for c in columns]
+
+    def gauges(self):
+        """The gauges' series (/gauges, written when the scene has [[gauges]]; an extension of
+        vesph-1, docs/user-guide.md "Gauges"): a dict name -> Gauge with .type ("point",
+        "elevation" or "front"), .position (array, m; None for a front) and .columns, a dict
+        column -> 1-D array with "time" first (one row per frame). Empty for files without
+        gauges."""
+        import h5py
+
+        if "gauges" not in self.f:
+            return {}
+        out = {}
+        for name, g in self.f["gauges"].items():
+            if not isinstance(g, h5py.Group) or "time" not in g:
+                raise ToolError(f"{self.path}: /gauges/{name} is not a gauge group with a time column")
+            cols = {"time": g["time"][...]}
+            for c in g:
+                if c != "time":
+                    cols[c] = g[c][...]
+            for c, v in cols.items():
+                if v.ndim != 1 or len(v) != len(cols["time"]):
+                    raise ToolError(f"{self.path}: /gauges/{name}/{c}: expected a 1-D dataset as long as its time")
+            position = np.asarray(g.attrs["position"], dtype=float) if "position" in g.attrs else None
+            out[name] = Gauge(as_str(g.attrs.get("type", "")), position, cols)
+        return out
 
     def close(self):
         self.f.close()

@@ -26,12 +26,21 @@ struct DiagnosticsRow {
   std::array<double, kMaxExtraDiagnostics> extra{};
 };
 
+// A gauge's series in /gauges/<name> (docs/user-guide.md "Output"): a group with attributes
+// type and position and one 1-D float64 dataset per column, "time" first, one row per frame.
+struct GaugeSeries {
+  std::string name, type;
+  std::vector<double> position;      // m (the point, or the line's foot; empty for a front)
+  std::vector<std::string> columns;  // "time", then the measured values
+};
+
 struct FileAttributes {
   int dim = 2;
   std::string scene_toml;
   double dx = 0, h = 0;
   std::string kernel;
   std::vector<std::string> extra_columns;  // diagnostics columns after the standard ones
+  std::vector<GaugeSeries> gauges;         // none: the file has no /gauges group
 };
 
 // The restart point of a run (`vesph run --resume`), kept in /checkpoint of the HDF5 file and
@@ -93,6 +102,9 @@ class OutputWriter {
   // box) and the diagnostics rows gathered since the last frame; flushes everything to disk.
   void writeFrame(double time, std::int64_t step, const ParticleSet<D>& p,
                   const std::vector<DiagnosticsRow>& new_rows);
+  // Appends one row per gauge (values in the order of FileAttributes::gauges' columns, time
+  // first); written to disk with the next frame's flush. Call it before writeFrame.
+  void appendGauges(const std::vector<std::vector<double>>& rows);
   // Replaces the checkpoint (/checkpoint); flushed. Called after the frame of the same state.
   void writeCheckpoint(const Checkpoint& c);
   std::size_t frames() const { return frames_.size(); }
@@ -107,6 +119,10 @@ class OutputWriter {
     bool stress, free_surface, pressure, stress_zz;
   };
   void appendDiagnostics(const std::vector<DiagnosticsRow>& rows);
+  // The /gauges group of a new file; on --resume its rows after the resume time are dropped
+  // (the resumed run writes them again with its frames). src/io/gauge_output.cpp.
+  void createGauges();
+  void truncateGauges(double resume_time);
   void writeXdmf() const;
   void reopen(const FileAttributes& attrs, double resume_time);  // the resuming constructor's work
   // Closes the file (once); every later write fails.
@@ -126,6 +142,8 @@ class OutputWriter {
   std::vector<FrameInfo> frames_;
   std::size_t diag_rows_ = 0;
   std::vector<std::string> extra_columns_;
+  std::vector<GaugeSeries> gauges_;
+  std::size_t gauge_rows_ = 0;
 };
 
 // Writes DIR/summary.json atomically.

@@ -1,6 +1,7 @@
 #pragma once
 // Particles from the scene's geometry (docs/architecture.md "Scenes"): the [[blocks]] of fluid
 // and walls on a lattice of spacing dx, fluid first (the moving particles), then the walls.
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -10,6 +11,7 @@
 #include "vesph/core/neighbours.hpp"
 #include "vesph/core/particles.hpp"
 #include "vesph/io/config.hpp"
+#include "vesph/physics/effect.hpp"
 
 namespace vesph {
 
@@ -22,12 +24,35 @@ struct LatticeGeometry {
   const Kernel& kernel;     // a wall must be one kernel support thick
 };
 
+// A fluid block that starts in hydrostatic equilibrium ([[blocks]] hydrostatic = true): its
+// particles [first, last) and its extent, for the density applied once the equation of state
+// and the body acceleration are known (applyHydrostaticDensity).
+template <int D>
+struct HydrostaticBlock {
+  std::size_t first = 0, last = 0;
+  Vec<D> lo = Vec<D>::Zero(), hi = Vec<D>::Zero();
+  std::optional<double> surface_height;  // m, along -g; absent: the block's top
+  std::string path;                      // for messages
+};
+
 // Reads [[blocks]] (and [initial] velocity) and adds their particles to `particles` (ids from
 // 0). Returns per wall particle its treatment (image walls, pressure floors), or an empty list
-// when every wall is plain dummy layers.
+// when every wall is plain dummy layers. The fluid blocks marked hydrostatic go to
+// `hydrostatic` when given (otherwise the key is refused).
 template <int D>
 std::vector<WallPoint<D>> generateParticles(ConfigTable& root, const LatticeGeometry<D>& geometry,
-                                            ParticleSet<D>& particles);
+                                            ParticleSet<D>& particles,
+                                            std::vector<HydrostaticBlock<D>>* hydrostatic = nullptr);
+
+// The hydrostatic initial density (docs/theory.md "Hydrostatic initial density"): each particle
+// of the blocks gets the density whose pressure is the hydrostatic one under the body
+// acceleration g,  p = p(rho0) + rho0 |g| (H - z),  z = x . (-g/|g|) its height and H the
+// block's free-surface height, by the equation of state's inverse (linear or Tait). The mass
+// stays rho0 dx^D. Throws InputError (naming the block) without an equation of state or g.
+template <int D>
+void applyHydrostaticDensity(const std::vector<HydrostaticBlock<D>>& blocks, const PressureModel* model,
+                             const Vec<D>& body_acceleration, double rest_density, const std::string& file,
+                             ParticleSet<D>& particles);
 
 // Wall particles within 1.5 dx of the initial fluid are "wall" (kind 1), deeper layers "dummy"
 // (kind 2); inflow buffer particles keep their kind. Needs the neighbour list of the set.

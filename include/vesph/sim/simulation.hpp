@@ -17,6 +17,7 @@
 #include "vesph/io/config.hpp"
 #include "vesph/io/output.hpp"
 #include "vesph/sim/checkpoint.hpp"
+#include "vesph/sim/gauges.hpp"
 #include "vesph/sim/ode_state.hpp"
 #include "vesph/sim/pressure_scheme.hpp"
 #include "vesph/sim/step_checks.hpp"
@@ -110,6 +111,7 @@ class Simulation {
   double dx_ = 0, rho0_ = 0, mu_ = 0, t_end_ = 0, skin_ = 0;
   std::vector<double> output_times_;
   StepChecks<D> checks_;
+  Gauges<D> gauges_;  // [[gauges]], evaluated with every frame
   Checkpoints<D> checkpoints_{system_, state_};
   std::string resolved_scene_;
 };

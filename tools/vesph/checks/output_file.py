@@ -29,7 +29,9 @@ What is checked
     free_surface uint8 [N]; ids are unique and
     floating-point data are finite; /diagnostics has the float64 1-D
     columns time, dt, kinetic_energy, mass, max_speed,
-    max_density_deviation, all of one length.
+    max_density_deviation, all of one length; /gauges, when present, holds
+    one group per gauge with a type attribute and float64 1-D columns as
+    long as its time column.
 (b) XDMF: well-formed XML, and valid against the DTD, by running
         xmllint --noout --nonet --dtdvalid tools/xdmf3.dtd FILE
     (the harmless "failed to load external entity Xdmf.dtd" warning caused
@@ -292,6 +294,27 @@ def check_h5(path, rep):
             if len(lengths) > 1:
                 rep.problem(f"/diagnostics columns have different lengths {sorted(lengths)}")
             rep.info("/diagnostics columns " + ", ".join(DIAGNOSTICS))
+
+        # --- gauges (optional: scenes with [[gauges]]): per gauge a group with a type
+        # attribute and float64 1-D columns, "time" first, all as long as the time column
+        if "gauges" in f:
+            if not isinstance(f["gauges"], h5py.Group):
+                rep.problem("/gauges is not a group")
+            else:
+                for name, g in f["gauges"].items():
+                    where = f"/gauges/{name}"
+                    if not isinstance(g, h5py.Group) or "time" not in g:
+                        rep.problem(f"{where}: expected a group with a time column")
+                        continue
+                    if "type" not in g.attrs:
+                        rep.problem(f"{where}: no type attribute")
+                    n = g["time"].shape[0] if g["time"].ndim == 1 else -1
+                    for col, d in g.items():
+                        if not isinstance(d, h5py.Dataset) or d.ndim != 1 or d.dtype != np.float64:
+                            rep.problem(f"{where}/{col}: expected a float64 1-D dataset")
+                        elif d.shape[0] != n:
+                            rep.problem(f"{where}/{col}: {d.shape[0]} rows, its time column {n}")
+                rep.info(f"/gauges: {len(f['gauges'])} gauge(s)")
     return info
 
 
