@@ -123,9 +123,10 @@ void checkOrder(const std::string& type, const std::string& table) {
 
 }  // namespace
 
-TEST_CASE("integrators: leapfrog and midpoint are second order on a smooth problem") {
+TEST_CASE("integrators: leapfrog, midpoint and symplectic are second order on a smooth problem") {
   checkOrder("leapfrog", "");
   checkOrder("midpoint", "");
+  checkOrder("symplectic", "");
 }
 
 TEST_CASE("integrators: every ERK table in fixed-step mode reaches its nominal order") {

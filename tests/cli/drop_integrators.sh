@@ -20,13 +20,13 @@ HALF="--set particles.spacing=4e-4 --set domain.min=[-0.06,-0.0012] --set blocks
 for c in newtonian oldroyd_b ucm newtonian_isph oldroyd_b_isph; do
   Q=$QUARTER
   [ "$c" = oldroyd_b_isph ] && Q=$HALF
-  for integ in leapfrog midpoint arkode-fixed arkode; do
+  for integ in leapfrog midpoint arkode-fixed arkode symplectic; do
     # shellcheck disable=SC2086
     OMP_NUM_THREADS=1 "$VESPH" run "$SRC/cases/drop_$c.toml" -o "$WORK/${c}_$integ" --quiet $Q \
       --set "integrator.type=\"$integ\"" >"$WORK/${c}_$integ.log" 2>&1 &
   done
   wait
-  for integ in leapfrog midpoint arkode-fixed arkode; do
+  for integ in leapfrog midpoint arkode-fixed arkode symplectic; do
     r=$WORK/${c}_$integ
     grep -q '"status": "ok"' "$r/summary.json" 2>/dev/null && pass || fail "$c under $integ did not finish: $(tail -3 "$r.log")"
     $PY "$SRC/tools/drop_measure.py" "$r/drop_$c.h5" --no-png --no-fracture --max-volume-error 0.01 >"$r/measure.log" 2>&1 && pass ||
@@ -36,7 +36,7 @@ for c in newtonian oldroyd_b ucm newtonian_isph oldroyd_b_isph; do
 import csv, sys
 w, c = sys.argv[1], sys.argv[2]
 widths = {}
-for integ in ("leapfrog", "midpoint", "arkode-fixed", "arkode"):
+for integ in ("leapfrog", "midpoint", "arkode-fixed", "arkode", "symplectic"):
     with open(f"{w}/{c}_{integ}/drop_{c}_drop.csv") as f:
         rows = list(csv.DictReader(f))
     last = rows[-1]
