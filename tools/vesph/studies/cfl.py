@@ -8,8 +8,8 @@ Usage
         [--t-end-viscous T] [--t-end-acoustic T] [--no-extend] [--threads N]
         [--vesph BIN] [--scene FILE] [--keep-runs DIR]
 
-Integrators: leapfrog, midpoint, arkode-fixed DORMAND_PRINCE_7_4_5 and
-arkode-fixed BOGACKI_SHAMPINE_4_2_3, each with the step from the stability limits
+Integrators: leapfrog, midpoint, arkode-fixed DORMAND_PRINCE_7_4_5,
+arkode-fixed BOGACKI_SHAMPINE_4_2_3 and symplectic, each with the step from the stability limits
 (theory.md section 8), on the H/40 Poiseuille case.
 
 Sweep "viscous": the case as it is (c = 8.94e-3 m/s from delta = 0.01), where the viscous
@@ -67,7 +67,7 @@ from vesph.studies import common as sc
 
 STUDY = "cfl"
 INTEGRATORS = [("leapfrog", None), ("midpoint", None), ("arkode-fixed", "DORMAND_PRINCE_7_4_5"),
-               ("arkode-fixed", "BOGACKI_SHAMPINE_4_2_3")]
+               ("arkode-fixed", "BOGACKI_SHAMPINE_4_2_3"), ("symplectic", None)]
 COLUMNS = [("sweep", "sweep", "s"), ("series", "integrator", "s"), ("coefficient", "coef", ".4g"),
            ("via", "via", "s"), ("dt", "step [s]", ".3g"), ("status", "status", "s"),
            ("final_time", "t reached [s]", ".4g"), ("steps", "steps", "d"),
@@ -278,7 +278,7 @@ def plot(path, rows):
     plt = sc.pyplot()
     fig, axes = plt.subplots(2, 2, figsize=(8.0, 6.0))
     colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
-    markers = "osD^"
+    markers = "osD^v"
     for j, sweep in enumerate(("viscous", "acoustic")):
         srows = [r for r in rows if r["sweep"] == sweep]
         for i, key in enumerate(("err_analytic", "max_density_deviation")):
