@@ -40,9 +40,11 @@ std::unique_ptr<Integrator> makeIntegrator(ConfigTable& cfg, const ReferenceScal
   std::vector<std::string> names;
   for (const auto& e : integratorRegistry()) names.push_back(e.name);
   const std::string type = cfg.choice("type", "leapfrog", names);
-  const IntegratorEntry* entry = nullptr;
+  const IntegratorEntry* entry = nullptr;  // choice() refused any other name
   for (const auto& e : integratorRegistry())
     if (e.name == type) entry = &e;
+  // The WCSPH scheme passes the constant kWcsphDefaultCfl itself; an integrator with a stability
+  // range of its own (the one-evaluation symplectic scheme) replaces it. ISPH keeps its 0.175.
   if (entry->wcsph_default_cfl > 0 && default_cfl == kWcsphDefaultCfl) default_cfl = entry->wcsph_default_cfl;
   StepControl c;  // its members hold the defaults (also printed by `vesph list --json`)
   // The fixed-step integrators take the limits as their step, so the coefficients stay in
