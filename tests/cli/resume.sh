@@ -151,11 +151,11 @@ expect 0 "ok: finished" -- "$VESPH" run "$SCENE" -o "$WORK/sym_seg" --quiet $SYM
 expect 0 "ok: finished" -- "$VESPH" run "$SCENE" -o "$WORK/sym_seg" --quiet $SYM --set time.end=0.225 --set "output.times=[0.1125]" --resume
 compare "$WORK/sym_full" "$WORK/sym_seg" 1e-12 >"$WORK/sym_cmp.log" 2>&1 && pass || fail "segmented symplectic Poiseuille run differs: $(tail -3 "$WORK/sym_cmp.log")"
 # shellcheck disable=SC2086
-"$VESPH" run "$OB" -o "$WORK/ob_sym_full" --quiet $SYM --set time.end=0.25 >"$WORK/ob_sym.log" 2>&1 || fail "OB symplectic: $(tail -3 "$WORK/ob_sym.log")"
+"$VESPH" run "$OB" -o "$WORK/ob_sym_full" --quiet $SYM --set time.end=0.25 --set output.interval=$half >"$WORK/ob_sym.log" 2>&1 || fail "OB symplectic: $(tail -3 "$WORK/ob_sym.log")"
 # shellcheck disable=SC2086
-expect 0 "ok: finished" -- "$VESPH" run "$OB" -o "$WORK/ob_sym_seg" --quiet $SYM --set time.end="$half" --set "output.times=[$half]"
+expect 0 "ok: finished" -- "$VESPH" run "$OB" -o "$WORK/ob_sym_seg" --quiet $SYM --set time.end="$half" --set output.interval=$half
 # shellcheck disable=SC2086
-expect 0 "ok: finished" -- "$VESPH" run "$OB" -o "$WORK/ob_sym_seg" --quiet $SYM --resume --set time.end=0.25
+expect 0 "ok: finished" -- "$VESPH" run "$OB" -o "$WORK/ob_sym_seg" --quiet $SYM --resume --set time.end=0.25 --set output.interval=$half
 compare "$WORK/ob_sym_full" "$WORK/ob_sym_seg" 1e-12 >"$WORK/ob_sym_cmp.log" 2>&1 && pass || fail "segmented symplectic Oldroyd-B run differs: $(tail -3 "$WORK/ob_sym_cmp.log")"
 F=$SRC/cases/channel_inflow_outflow.toml
 # shellcheck disable=SC2086
