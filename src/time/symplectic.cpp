@@ -1,11 +1,11 @@
 // Symplectic position Verlet (drift-kick-drift) with one right-hand-side evaluation per step:
 // the rates of the previous step's midpoint evaluation are reused to predict the next midpoint
 // (first-same-as-last in spirit: the last evaluation of a step supplies the first rates of the
-// next). Leimkuhler & Reich (2004), "Simulating Hamiltonian Dynamics", §2.3 (position Verlet);
-// Monaghan (2005), Rep. Prog. Phys. 68, §7 (the symplectic SPH step); the predictor with the
-// last midpoint rates is PySPH's predict-evaluate-correct (PECIntegrator). docs/theory.md
-// "Time integration" gives the equations:
-//   half drift   r^{n+1/2} = r^n + dt/2 (v^n + u^n),      u = dx/dt - v (XSPH; zero without)
+// next). Leimkuhler & Reich (2004), "Simulating Hamiltonian Dynamics", ch. 2 (Stormer-Verlet
+// in position form); Monaghan (2005), Rep. Prog. Phys. 68, 1703 (the symplectic SPH step); the
+// predictor with the last midpoint rates is PySPH's predict-evaluate-correct (PECIntegrator).
+// docs/theory.md §9.4 gives the equations:
+//   half drift   r^{n+1/2} = r^n + dt/2 (v^n + u^{n-1/2}), u = dx/dt - v (XSPH; zero without)
 //   predictor    q^{n+1/2} = q^n + dt/2 F_q^{n-1/2}        q = density, velocity, stresses
 //   evaluate     F^{n+1/2} = F(r^{n+1/2}, q^{n+1/2})       the only evaluation of the step
 //   kick         q^{n+1}   = q^n + dt F_q^{n+1/2}          midpoint rule
