@@ -171,8 +171,11 @@ int listJson() {
         {"force", "force_coefficient * sqrt(h / a_max)"},
         {"relaxation", "relaxation_coefficient * lambda"}}}};
   json integrators = json::array();
-  for (const auto& e : integratorRegistry())
-    integrators.push_back({{"name", e.name}, {"summary", e.summary}, {"default_step_limits", step_limits}});
+  for (const auto& e : integratorRegistry()) {
+    json own = step_limits;  // an integrator with its own WCSPH default CFL coefficient
+    if (e.wcsph_default_cfl > 0) own["cfl"]["wcsph"] = e.wcsph_default_cfl;
+    integrators.push_back({{"name", e.name}, {"summary", e.summary}, {"default_step_limits", own}});
+  }
   out["integrators"] = integrators;
   out["step_limits"] = step_limits;
   json tables = json::array();

@@ -23,6 +23,7 @@ std::unique_ptr<Integrator> makeLeapfrog(ConfigTable&, const StepControl&, const
 std::unique_ptr<Integrator> makeMidpoint(ConfigTable&, const StepControl&, const ReferenceScales&);
 std::unique_ptr<Integrator> makeArkode(ConfigTable&, const StepControl&, const ReferenceScales&);
 std::unique_ptr<Integrator> makeArkodeFixed(ConfigTable&, const StepControl&, const ReferenceScales&);
+std::unique_ptr<Integrator> makeSymplectic(ConfigTable&, const StepControl&, const ReferenceScales&);
 
 const std::vector<IntegratorEntry>& integratorRegistry() {
   static const std::vector<IntegratorEntry> registry = {
@@ -30,6 +31,7 @@ const std::vector<IntegratorEntry>& integratorRegistry() {
       {"midpoint", "midpoint predictor-corrector of Fang et al., eqs. (49)-(50); fixed step from the stability limits; 2nd order", &makeMidpoint},
       {"arkode", "SUNDIALS ARKODE ERKStep, adaptive error-controlled explicit Runge-Kutta (integrator.table, rtol, atol_*), step also bounded by the stability limits", &makeArkode},
       {"arkode-fixed", "SUNDIALS ARKODE ERKStep in fixed-step mode (integrator.table); step from the stability limits or integrator.step", &makeArkodeFixed},
+      {"symplectic", "symplectic position Verlet (drift-kick-drift), one evaluation per step (the last midpoint rates predict the next midpoint); fixed step from the stability limits; 2nd order", &makeSymplectic, kSymplecticWcsphDefaultCfl},
   };
   return registry;
 }
@@ -38,6 +40,12 @@ std::unique_ptr<Integrator> makeIntegrator(ConfigTable& cfg, const ReferenceScal
   std::vector<std::string> names;
   for (const auto& e : integratorRegistry()) names.push_back(e.name);
   const std::string type = cfg.choice("type", "leapfrog", names);
+  const IntegratorEntry* entry = nullptr;  // choice() refused any other name
+  for (const auto& e : integratorRegistry())
+    if (e.name == type) entry = &e;
+  // The WCSPH scheme passes the constant kWcsphDefaultCfl itself; an integrator with a stability
+  // range of its own (the one-evaluation symplectic scheme) replaces it. ISPH keeps its 0.175.
+  if (entry->wcsph_default_cfl > 0 && default_cfl == kWcsphDefaultCfl) default_cfl = entry->wcsph_default_cfl;
   StepControl c;  // its members hold the defaults (also printed by `vesph list --json`)
   // The fixed-step integrators take the limits as their step, so the coefficients stay in
   // their explicit stability range. For the adaptive 'arkode' the limits only cap a step that
@@ -48,14 +56,15 @@ std::unique_ptr<Integrator> makeIntegrator(ConfigTable& cfg, const ReferenceScal
   c.cfl = cfg.numberIn("cfl", default_cfl, 1e-6, cap_range);
   c.viscous_coefficient = cfg.numberIn("viscous_coefficient", c.viscous_coefficient, 1e-6, cap_range);
   c.force_coefficient = cfg.numberIn("force_coefficient", c.force_coefficient, 1e-6, 1.0);
-  c.relaxation_coefficient = cfg.numberIn("relaxation_coefficient", c.relaxation_coefficient, 1e-6, 2.0);
+  // The symplectic scheme's relaxation is stable to dt = lambda (src/time/symplectic.cpp), the
+  // two-evaluation schemes' to 2 lambda.
+  c.relaxation_coefficient =
+      cfg.numberIn("relaxation_coefficient", c.relaxation_coefficient, 1e-6, type == "symplectic" ? 1.0 : 2.0);
   c.max_step = cfg.optionalNumber("max_step", Bound::positive, "s").value_or(c.max_step);
   c.fixed_step = cfg.optionalNumber("step", Bound::positive, "s").value_or(0.0);
   if (c.fixed_step > 0 && type == "arkode")
     cfg.fail("step", "no fixed step for the adaptive integrator 'arkode' (use 'arkode-fixed', or initial_step)");
-  for (const auto& e : integratorRegistry())
-    if (e.name == type) return e.make(cfg, c, scales);
-  cfg.fail("type", "a known integrator");
+  return entry->make(cfg, c, scales);
 }
 
 }  // namespace vesph

@@ -5,7 +5,7 @@
 # thesis eq. (3.38) that set the sound speed (tools/poiseuille_check.py). The output must be a
 # valid vesph-1 file (every integrator at its default settings) with an XDMF file valid against tools/xdmf3.dtd (tools/check_output.py).
 . "$(dirname "$0")/lib.sh"
-for integrator in leapfrog midpoint arkode arkode-fixed; do
+for integrator in leapfrog midpoint arkode arkode-fixed symplectic; do
   expect 0 "ok: finished" -- "$VESPH" run "$SCENE" -o "$WORK/$integrator" --quiet --set integrator.type=$integrator
   $PY "$SRC/tools/poiseuille_check.py" "$WORK/$integrator/poiseuille_newtonian.h5" --times 0.0225 0.045 0.1125 0.5 > "$WORK/check.log" 2>&1 \
     && pass || fail "$integrator: Poiseuille validation failed: $(cat "$WORK/check.log")"

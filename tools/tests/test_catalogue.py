@@ -36,7 +36,9 @@ class Catalogue(unittest.TestCase):
                          {"cfl": 0.125, "viscous": 0.125, "force": 0.25, "relaxation": 0.5})
         self.assertEqual(limits.default_coefficients("isph")["cfl"], 0.175)
         for entry in catalogue.catalogue()["integrators"]:
-            self.assertEqual(entry["default_step_limits"]["cfl"], {"wcsph": 0.125, "isph": 0.175})
+            # the one-evaluation symplectic scheme has its own WCSPH default (performance.md)
+            wcsph = 0.175 if entry["name"] == "symplectic" else 0.125
+            self.assertEqual(entry["default_step_limits"]["cfl"], {"wcsph": wcsph, "isph": 0.175})
 
     def test_step_limits(self):
         h, c, nu = 4e-5, 0.1, 1e-6

@@ -45,6 +45,10 @@ struct StabilitySnapshot {
 // cfl; the incompressible scheme's projection allows a larger step.
 inline constexpr double kWcsphDefaultCfl = 0.125;
 inline constexpr double kIsphDefaultCfl = 0.175;
+// The one-evaluation symplectic scheme's own WCSPH default (src/time/symplectic.cpp): stable up
+// to 0.35 and unstable at 0.5 on a dam break and on the drop, so 0.175 keeps a factor 2
+// (docs/performance.md "One evaluation per step").
+inline constexpr double kSymplecticWcsphDefaultCfl = 0.175;
 
 struct StepControl {
   double cfl = kWcsphDefaultCfl;

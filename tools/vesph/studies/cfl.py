@@ -8,8 +8,8 @@ Usage
         [--t-end-viscous T] [--t-end-acoustic T] [--no-extend] [--threads N]
         [--vesph BIN] [--scene FILE] [--keep-runs DIR]
 
-Integrators: leapfrog, midpoint, arkode-fixed DORMAND_PRINCE_7_4_5 and
-arkode-fixed BOGACKI_SHAMPINE_4_2_3, each with the step from the stability limits
+Integrators: leapfrog, midpoint, arkode-fixed DORMAND_PRINCE_7_4_5,
+arkode-fixed BOGACKI_SHAMPINE_4_2_3 and symplectic, each with the step from the stability limits
 (theory.md section 8), on the H/40 Poiseuille case.
 
 Sweep "viscous": the case as it is (c = 8.94e-3 m/s from delta = 0.01), where the viscous
@@ -42,6 +42,18 @@ DIR/commands.txt; prints the table and, per sweep and integrator, the largest st
 the smallest unstable coefficient.
 --quick: viscous 0.125, 0.35, 0.5, 0.7, 1.0; cfl 0.25, 0.7, 1.0; t_end 0.0225 / 0.0045 s.
 
+--scene-sweep: instead of the Poiseuille sweeps, raise integrator.cfl on the scene given by
+  --scene (a dam break, a drop; its own settings otherwise, extra --set overrides with
+  --set) for each integrator of --integrators (default leapfrog, symplectic, arkode,
+  arkode-fixed DP5), coefficients --cfl (default 0.0625 ... 1.0; the scene keys accept up to
+  1, arkode's cap up to 10) to --t-end, until the first unstable run per integrator. Unstable:
+  vesph exit 3 (its checks: NaN, density deviation, speed guard, a particle leaving the
+  domain), or a max density deviation over 3 times that of the same integrator at the
+  smallest coefficient (noted "growing"). Reported per run: steps, rhs evaluations, wall
+  time, max density deviation and the fluid's x-extent at t_end (max x - min x: the surge
+  front of a dam break, the spread of a drop) against the smallest-coefficient run of the
+  first integrator. Writes DIR/cfl_scene.csv and DIR/commands.txt.
+
 Exit status: 0 when every run finished or was recorded as unstable; 1 when a run failed
 otherwise; 2 for usage errors.
 """
@@ -55,7 +67,7 @@ from vesph.studies import common as sc
 
 STUDY = "cfl"
 INTEGRATORS = [("leapfrog", None), ("midpoint", None), ("arkode-fixed", "DORMAND_PRINCE_7_4_5"),
-               ("arkode-fixed", "BOGACKI_SHAMPINE_4_2_3")]
+               ("arkode-fixed", "BOGACKI_SHAMPINE_4_2_3"), ("symplectic", None)]
 COLUMNS = [("sweep", "sweep", "s"), ("series", "integrator", "s"), ("coefficient", "coef", ".4g"),
            ("via", "via", "s"), ("dt", "step [s]", ".3g"), ("status", "status", "s"),
            ("final_time", "t reached [s]", ".4g"), ("steps", "steps", "d"),
@@ -79,7 +91,16 @@ def main(argv=None):
     ap.add_argument("--no-extend", action="store_true",
                     help="do not go beyond the listed coefficients")
     ap.add_argument("--ny", type=int, default=40, help="particles across H (default 40)")
+    ap.add_argument("--scene-sweep", action="store_true",
+                    help="sweep integrator.cfl on --scene itself (see above)")
+    ap.add_argument("--integrators", nargs="+",
+                    help="--scene-sweep: integrators, TYPE or arkode[-fixed]:TABLE")
+    ap.add_argument("--t-end", type=float, help="--scene-sweep: end time, s (default the scene's)")
+    ap.add_argument("--set", dest="sets", action="append", default=[],
+                    help="--scene-sweep: an extra override for every run (repeatable)")
     a = ap.parse_args(argv)
+    if a.scene_sweep:
+        return scene_sweep(a)
     if a.quick:
         visc = a.viscous or [0.125, 0.35, 0.5, 0.7, 1.0]
         cfls = a.cfl or [0.25, 0.7, 1.0]
@@ -173,6 +194,71 @@ def main(argv=None):
     return runner.finish()
 
 
+SCENE_COLUMNS = [("series", "integrator", "s"), ("coefficient", "cfl", ".4g"), ("status", "status", "s"),
+                 ("final_time", "t reached [s]", ".4g"), ("steps", "steps", "d"),
+                 ("rhs_evals", "rhs evals", "d"), ("rhs_per_step", "rhs/step", ".2f"),
+                 ("wall_s", "wall [s]", ".2f"), ("max_density_deviation", "max |drho|/rho0", ".3e"),
+                 ("extent", "x-extent [m]", ".5g"), ("extent_change", "vs reference", ".2e"),
+                 ("note", "note", "s")]
+
+
+def scene_sweep(a):
+    """integrator.cfl raised on a scene of its own until the run is unstable (--scene-sweep)."""
+    if a.t_end is None:
+        print("cfl: --scene-sweep needs --t-end", file=sys.stderr)
+        return 2
+    cfls = a.cfl or ([0.125, 0.25, 0.5, 1.0] if a.quick else [0.0625, 0.125, 0.175, 0.25, 0.35, 0.5, 0.7, 1.0])
+    specs = a.integrators or ["leapfrog", "symplectic", "arkode", "arkode-fixed:DORMAND_PRINCE_7_4_5"]
+    runner = sc.Runner(a, STUDY)
+    rows, reference = [], None
+    for spec in specs:
+        kind, _, table = spec.partition(":")
+        series = sc.integrator_label(kind, table or None)
+        first = None
+        for k in sorted(cfls):
+            if k > (10.0 if kind == "arkode" else 1.0):
+                continue
+            s = list(a.sets) + sc.integrator_sets(kind, table or None) + [f"integrator.cfl={sc.fnum(k)}"]
+            run = runner.run(f"{series} cfl={k:.4g}", s, a.t_end)
+            row = {"series": series, "coefficient": k, "status": run.status, "final_time": run.final_time,
+                   "steps": run.steps, "rhs_evals": run.rhs_evals,
+                   "rhs_per_step": run.rhs_evals / run.steps if run.steps > 0 else math.nan,
+                   "wall_s": run.wall, "max_density_deviation": run.density_deviation,
+                   "extent": math.nan, "extent_change": math.nan, "note": ""}
+            last = run.frame_at(a.t_end) if run.ok else None
+            if last is not None and last.x is not None and len(last.x):
+                row["extent"] = float(last.x.max() - last.x.min())
+            if run.ok and first is None:
+                first = row
+            if reference is None and run.ok:
+                reference = row
+            if reference is not None and math.isfinite(row["extent"]):
+                row["extent_change"] = row["extent"] / reference["extent"] - 1
+            if run.ok and first is not None and row is not first and \
+                    row["max_density_deviation"] > 3 * first["max_density_deviation"]:
+                row["note"] = f"growing: drho x{row['max_density_deviation'] / first['max_density_deviation']:.2g}"
+            rows.append(row)
+            if not run.ok or row["note"]:
+                break
+    sc.write_csv(runner.out / "cfl_scene.csv", rows, SCENE_COLUMNS)
+    print(f"CFL sweep on {a.scene} to t = {a.t_end} s, OMP_NUM_THREADS = {a.threads}"
+          + (", --set " + " --set ".join(a.sets) if a.sets else ""))
+    print(f"x-extent: max x - min x of the fluid at t_end; 'vs reference': relative to "
+          f"{reference['series']} at cfl {reference['coefficient']:g}" if reference else "no run finished")
+    sc.print_table(rows, SCENE_COLUMNS)
+    print("\nlargest stable coefficient (no exit 3, no growing density deviation):")
+    for spec in specs:
+        kind, _, table = spec.partition(":")
+        series = sc.integrator_label(kind, table or None)
+        rs = [r for r in rows if r["series"] == series]
+        good = [r["coefficient"] for r in rs if r["status"] == "ok" and not r["note"]]
+        bad = [r["coefficient"] for r in rs if r["status"] != "ok" or r["note"]]
+        print(f"  {series:<18s} stable up to {max(good) if good else '-'}; "
+              f"unstable from {min(bad) if bad else 'none tried'}")
+    print(f"\nwrote {runner.out / 'cfl_scene.csv'}, {runner.out / 'commands.txt'}")
+    return runner.finish()
+
+
 def note(row, rows):
     """Flags for a run that finished but looks unstable: a large error, or a density
     deviation far above that of the same integrator at its smallest coefficient."""
@@ -192,7 +278,7 @@ def plot(path, rows):
     plt = sc.pyplot()
     fig, axes = plt.subplots(2, 2, figsize=(8.0, 6.0))
     colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
-    markers = "osD^"
+    markers = "osD^v"
     for j, sweep in enumerate(("viscous", "acoustic")):
         srows = [r for r in rows if r["sweep"] == sweep]
         for i, key in enumerate(("err_analytic", "max_density_deviation")):

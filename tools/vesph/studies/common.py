@@ -146,6 +146,7 @@ class FluidFrame:
     y: np.ndarray
     vx: np.ndarray
     rho: np.ndarray
+    x: np.ndarray = None  # first coordinate (the scene sweep's extent of the fluid)
 
 
 @dataclass
@@ -242,7 +243,8 @@ def read_output(run, directory):
             order = np.argsort(ids, kind="stable")
             run.frames.append(FluidFrame(
                 time=t, ids=ids[order], y=g["position"][fl, 1][order],
-                vx=g["velocity"][fl, 0][order], rho=g["density"][fl][order]))
+                vx=g["velocity"][fl, 0][order], rho=g["density"][fl][order],
+                x=g["position"][fl, 0][order]))
         if "diagnostics" in out.f:
             run.diag_time, run.diag_max_speed = out.diagnostics("time", "max_speed")
 
