@@ -30,6 +30,9 @@ class Viscosity final : public PairEffect<D, Viscosity<D>> {
   void stability(StabilityInputs& in) const override {
     in.kinematic_viscosity = std::max(in.kinematic_viscosity, nu_);
   }
+  // Linear in the velocities (the wall velocities are extrapolated from them): implicit under
+  // arkode-imex, which lifts the viscous step limit (docs/theory.md "Implicit-explicit integration").
+  ImplicitPart implicitPart() const override { return ImplicitPart::all; }
 
   // Array pointers live in the accumulator so that the pair loop keeps them in registers.
   struct Local {

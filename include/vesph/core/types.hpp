@@ -30,6 +30,12 @@ enum class ParticleKind : std::uint8_t {
   inflow = 3,  // inflow buffer particles (prescribed motion)
 };
 
+// Which part of the right-hand side f = f_E + f_I an evaluation computes: all of it, the
+// explicit (non-stiff) part or the implicit (stiff, linear) part of an implicit-explicit
+// integrator (docs/theory.md "Implicit-explicit integration"). Each effect declares its
+// implicit part (Effect::implicitPart).
+enum class RhsPart : std::uint8_t { full, explicit_part, implicit_part };
+
 // Invalid user input (scene, command line). Exit code 2.
 struct InputError : std::runtime_error {
   using std::runtime_error::runtime_error;

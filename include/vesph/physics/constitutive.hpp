@@ -76,6 +76,11 @@ constexpr bool hasOutOfPlaneStress() {
 //     modulus G = eta_p/lambda for the elastic wave speed)
 // and optionally
 //   double shortestRelaxationTime() const   the relaxation step limit's time (default lambda)
+//   double linearRelaxationTime() const     lambda of a term -S/lambda the rate contains, for
+//     implicit-explicit integrators: the effect's implicit part is then -S/lambda and its
+//     explicit part the rate plus S/lambda (ImplicitPart::linear_relaxation; docs/theory.md
+//     "Implicit-explicit integration"). Models whose relaxation is nonlinear in S (XPP) stay
+//     explicit.
 template <int D, class Model>
 class ConstitutiveEffect : public Effect<D> {
  public:
@@ -118,12 +123,22 @@ class ConstitutiveEffect : public Effect<D> {
     if (shortest > 0) in.relaxation_time = in.relaxation_time > 0 ? std::min(in.relaxation_time, shortest) : shortest;
   }
 
+  ImplicitPart implicitPart() const override {
+    return hasLinearRelaxation() ? ImplicitPart::linear_relaxation : ImplicitPart::none;
+  }
+
   double stressScale(double velocity, double length) const override {
     return static_cast<const Model&>(*this).polymerViscosity() * velocity / length;
   }
 
   void particles(const RhsContext<D>& ctx, std::size_t begin, std::size_t end) const override {
     const Model& m = static_cast<const Model&>(*this);
+    if constexpr (hasLinearRelaxation()) {
+      if (ctx.part != RhsPart::full) {
+        splitParticles(ctx, begin, end, m.linearRelaxationTime());
+        return;
+      }
+    }
     const double* k = kappa_->data.data();
     const double* S = stress_->data.data();
     double* dS = ctx.field_rates[slot_];
@@ -152,6 +167,47 @@ class ConstitutiveEffect : public Effect<D> {
       std::ostringstream os;
       os << e.what() << " (fluid particle id " << ctx.particles.id[i] << " at t = " << ctx.time << " s)";
       throw NumericalFailure(os.str());
+    }
+  }
+
+ protected:
+  static constexpr bool hasLinearRelaxation() {
+    return requires(const Model& m) { m.linearRelaxationTime(); };
+  }
+
+ private:
+  // One part of the rate of a model with a linear relaxation -S/lambda: the implicit part is
+  // that term, the explicit part the rest of the rate (rate + S/lambda); their sum is the rate
+  // to round-off. The extra stress for output is written by the explicit part.
+  void splitParticles(const RhsContext<D>& ctx, std::size_t begin, std::size_t end, double lambda) const {
+    const Model& m = static_cast<const Model&>(*this);
+    const double* S = stress_->data.data();
+    double* dS = ctx.field_rates[slot_];
+    constexpr int nc = symmetricComponents<D>();
+    const double inverse_lambda = 1.0 / lambda;
+    if (ctx.part == RhsPart::implicit_part) {
+      for (std::size_t k = nc * begin; k < nc * end; ++k) dS[k] = -inverse_lambda * S[k];
+      if constexpr (outOfPlane())
+        for (std::size_t i = begin; i < end; ++i) ctx.field_rates[slot_zz_][i] = -inverse_lambda * zz_->data[i];
+      return;
+    }
+    const double* k = kappa_->data.data();
+    double* T = extra_->data.data();
+    for (std::size_t i = begin; i < end; ++i) {
+      const Eigen::Map<const Eigen::Matrix<double, D, D, Eigen::RowMajor>> kappa(k + D * D * i);
+      const Mat<D> Si = unpackSymmetric<D>(S + nc * i);
+      if constexpr (outOfPlane()) {
+        Mat<3> kappa3 = Mat<3>::Zero(), S3 = Mat<3>::Zero();
+        kappa3.template topLeftCorner<2, 2>() = kappa;
+        S3.template topLeftCorner<2, 2>() = Si;
+        S3(2, 2) = zz_->data[i];
+        const Mat<3> R = m.rate(kappa3, S3) + inverse_lambda * S3;
+        packSymmetric<2>(R.template topLeftCorner<2, 2>(), dS + nc * i);
+        ctx.field_rates[slot_zz_][i] = R(2, 2);
+      } else {
+        packSymmetric<D>(m.rate(kappa, Si) + inverse_lambda * Si, dS + nc * i);
+      }
+      packSymmetric<D>(Si + solvent_viscosity_ * (kappa + kappa.transpose()), T + nc * i);
     }
   }
 

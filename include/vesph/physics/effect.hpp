@@ -44,7 +44,22 @@ struct RhsContext {
   // Rates of the evolving fields (elastic stresses), by the slot Setup::evolve returned;
   // each [n_moving * components].
   double* const* field_rates;
+  // The part of the right-hand side being evaluated. Only an effect whose implicit part is
+  // ImplicitPart::linear_relaxation reads it: it then writes only its explicit or only its
+  // implicit term. The system runs an ImplicitPart::all effect only for full and implicit_part.
+  RhsPart part = RhsPart::full;
 };
+
+// What of an effect's contribution an implicit-explicit integrator (arkode-imex) treats
+// implicitly: a term linear in the velocities and evolving fields at frozen positions and
+// densities (docs/theory.md "Implicit-explicit integration"). An implicit term also frees the
+// explicit step from its stability limit (the viscous or the relaxation limit).
+//   none                the whole contribution is explicit (the default)
+//   all                 the whole contribution is implicit (the viscous term); its stability
+//                       inputs do not bound the explicit step
+//   linear_relaxation   the linear relaxation -S/lambda of an evolving stress is implicit, the
+//                       rest of the rate explicit; its relaxation time does not bound the step
+enum class ImplicitPart { none, all, linear_relaxation };
 
 // The pressure closure of the scheme (WCSPH: the equation of state). Walls use its
 // inverse to give their particles the density that matches the extrapolated pressure.
@@ -143,6 +158,8 @@ class Effect {
   // If this effect is the scheme's pressure closure, return it.
   virtual const PressureModel* pressureModel() const { return nullptr; }
   virtual void stability(StabilityInputs& in) const {}
+  // The term an implicit-explicit integrator may treat implicitly (see ImplicitPart).
+  virtual ImplicitPart implicitPart() const { return ImplicitPart::none; }
   // The scale of the stress an evolving model produces at velocity V over length L (Pa), for
   // default error-control tolerances; 0 when the effect evolves no stress.
   virtual double stressScale(double velocity, double length) const { return 0.0; }

@@ -34,6 +34,8 @@ class OldroydB : public ConstitutiveEffect<D, OldroydB<D>> {
   }
   double polymerViscosity() const { return rate_.eta_p; }
   double relaxationTime() const { return rate_.lambda; }
+  // The rate holds -S/lambda: implicit under arkode-imex (ConstitutiveEffect).
+  double linearRelaxationTime() const { return rate_.lambda; }
 
  private:
   bool ucm_;
