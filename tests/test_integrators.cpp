@@ -332,7 +332,7 @@ TEST_CASE("integrators: adaptive IMEX ARKODE meets its tolerance") {
   CHECK(errors[1] < errors[0]);
 }
 
-TEST_CASE("integrators: the IMEX split is exact and frees the step from the viscous and relaxation limits") {
+TEST_CASE("integrators: the IMEX split is exact and frees the step from the viscous, relaxation and elastic limits") {
   // Oldroyd-B start-up channel (viscous solvent, walls, elastic stress): the explicit and the
   // implicit part add up to the full right-hand side to round-off, at a state with flow and
   // stress (after a few steps).
@@ -364,14 +364,16 @@ TEST_CASE("integrators: the IMEX split is exact and frees the step from the visc
     // positions and densities have no implicit rate; velocities and stresses do
     CHECK((s < 2 ? implicit_size == 0 : implicit_size > 0));
   }
-  // The explicit part's stability inputs lack the viscous and relaxation terms.
+  // The explicit part's stability inputs lack the viscous and relaxation terms and the elastic
+  // wave (the stress divergence and the linear part of the rate are implicit).
   const StabilitySnapshot explicit_stability = sys.explicitStability();
   CHECK(full_stability.kinematic_viscosity > 0);
   CHECK(full_stability.relaxation_time > 0);
   CHECK(explicit_stability.kinematic_viscosity == 0);
   CHECK(explicit_stability.relaxation_time == 0);
   CHECK(explicit_stability.sound_speed == full_stability.sound_speed);
-  CHECK(explicit_stability.elastic_wave_speed == full_stability.elastic_wave_speed);
+  CHECK(full_stability.elastic_wave_speed > 0);
+  CHECK(explicit_stability.elastic_wave_speed == 0);
   const StepLimits limits = stepLimits(explicit_stability, StepControl{});
   CHECK(limits.viscous == std::numeric_limits<double>::infinity());
   CHECK(limits.relaxation == std::numeric_limits<double>::infinity());
@@ -380,7 +382,8 @@ TEST_CASE("integrators: the IMEX split is exact and frees the step from the visc
 TEST_CASE("integrators: every constitutive model runs under arkode-imex and matches an explicit run") {
   // A short start-up of each model's channel, once with the explicit adaptive 'arkode' and
   // once with 'arkode-imex', both at rtol = 1e-6: the velocities (and elastic stresses) agree
-  // to 1e-3 of their largest value, the time-integration error of either.
+  // to 1e-5 of their largest value (measured: 1e-7 for the second-order fluid, 1e-9 or less for
+  // the others).
   struct Case {
     const char* scene;
     const char* end;
@@ -418,7 +421,7 @@ TEST_CASE("integrators: every constitutive model runs under arkode-imex and matc
       }
       MESSAGE(std::string(c.scene) << std::string(s ? " stresses" : " velocities") << ": max difference " << diff << " of " << scale
                       << "; steps arkode " << steps_explicit << ", arkode-imex " << steps_imex);
-      CHECK(diff <= 1e-3 * scale);
+      CHECK(diff <= 1e-5 * scale);
     }
   }
 }

@@ -56,9 +56,12 @@ void SphSystem<D>::setup(double spacing, double rest_density, double viscosity, 
     const ImplicitPart implicit = e->implicitPart();
     if (implicit != ImplicitPart::all) {
       explicit_.add(e.get());
-      const double relaxation_time = explicit_stability_inputs_.relaxation_time;
+      const StabilityInputs before = explicit_stability_inputs_;
       e->stability(explicit_stability_inputs_);
-      if (implicit == ImplicitPart::linear_relaxation) explicit_stability_inputs_.relaxation_time = relaxation_time;
+      if (implicit == ImplicitPart::linear_rate) {
+        explicit_stability_inputs_.relaxation_time = before.relaxation_time;
+        explicit_stability_inputs_.elastic_wave_speed = before.elastic_wave_speed;
+      }
     }
     if (implicit != ImplicitPart::none) implicit_.add(e.get());
     const bool pair_phase = e->phase() == Phase::gradients || e->phase() == Phase::forces;

@@ -76,11 +76,11 @@ constexpr bool hasOutOfPlaneStress() {
 //     modulus G = eta_p/lambda for the elastic wave speed)
 // and optionally
 //   double shortestRelaxationTime() const   the relaxation step limit's time (default lambda)
-//   double linearRelaxationTime() const     lambda of a term -S/lambda the rate contains, for
-//     implicit-explicit integrators: the effect's implicit part is then -S/lambda and its
-//     explicit part the rate plus S/lambda (ImplicitPart::linear_relaxation; docs/theory.md
-//     "Implicit-explicit integration"). Models whose relaxation is nonlinear in S (XPP) stay
-//     explicit.
+//   Mat<D> linearRate(const Mat<D>& kappa, const Mat<D>& S) const   the part of the rate
+//     linear in kappa and S (Oldroyd-B: -S/lambda + (eta_p/lambda)(kappa + kappa^T)), for
+//     implicit-explicit integrators: the effect's implicit part is then that term and its
+//     explicit part the rest of the rate (ImplicitPart::linear_rate; docs/theory.md §9.4).
+//     Models whose relaxation is nonlinear in S (XPP) stay explicit.
 template <int D, class Model>
 class ConstitutiveEffect : public Effect<D> {
  public:
@@ -124,7 +124,7 @@ class ConstitutiveEffect : public Effect<D> {
   }
 
   ImplicitPart implicitPart() const override {
-    return hasLinearRelaxation() ? ImplicitPart::linear_relaxation : ImplicitPart::none;
+    return hasLinearRate() ? ImplicitPart::linear_rate : ImplicitPart::none;
   }
 
   double stressScale(double velocity, double length) const override {
@@ -133,9 +133,9 @@ class ConstitutiveEffect : public Effect<D> {
 
   void particles(const RhsContext<D>& ctx, std::size_t begin, std::size_t end) const override {
     const Model& m = static_cast<const Model&>(*this);
-    if constexpr (hasLinearRelaxation()) {
+    if constexpr (hasLinearRate()) {
       if (ctx.part != RhsPart::full) {
-        splitParticles(ctx, begin, end, m.linearRelaxationTime());
+        splitParticles(ctx, begin, end);
         return;
       }
     }
@@ -171,43 +171,31 @@ class ConstitutiveEffect : public Effect<D> {
   }
 
  protected:
-  static constexpr bool hasLinearRelaxation() {
-    return requires(const Model& m) { m.linearRelaxationTime(); };
+  static constexpr bool hasLinearRate() {
+    return !outOfPlane() && requires(const Model& m, const Mat<D>& k) { m.linearRate(k, k); };
   }
 
  private:
-  // One part of the rate of a model with a linear relaxation -S/lambda: the implicit part is
-  // that term, the explicit part the rest of the rate (rate + S/lambda); their sum is the rate
-  // to round-off. The extra stress for output is written by the explicit part.
-  void splitParticles(const RhsContext<D>& ctx, std::size_t begin, std::size_t end, double lambda) const {
+  // One part of the rate of a model with a linear part L(kappa, S): the implicit part is L, the
+  // explicit part the rest of the rate (rate - L); their sum is the rate to round-off. The
+  // extra stress for output is written by the explicit part.
+  void splitParticles(const RhsContext<D>& ctx, std::size_t begin, std::size_t end) const {
     const Model& m = static_cast<const Model&>(*this);
+    const double* k = kappa_->data.data();
     const double* S = stress_->data.data();
     double* dS = ctx.field_rates[slot_];
-    constexpr int nc = symmetricComponents<D>();
-    const double inverse_lambda = 1.0 / lambda;
-    if (ctx.part == RhsPart::implicit_part) {
-      for (std::size_t k = nc * begin; k < nc * end; ++k) dS[k] = -inverse_lambda * S[k];
-      if constexpr (outOfPlane())
-        for (std::size_t i = begin; i < end; ++i) ctx.field_rates[slot_zz_][i] = -inverse_lambda * zz_->data[i];
-      return;
-    }
-    const double* k = kappa_->data.data();
     double* T = extra_->data.data();
+    constexpr int nc = symmetricComponents<D>();
+    const bool implicit = ctx.part == RhsPart::implicit_part;
     for (std::size_t i = begin; i < end; ++i) {
       const Eigen::Map<const Eigen::Matrix<double, D, D, Eigen::RowMajor>> kappa(k + D * D * i);
       const Mat<D> Si = unpackSymmetric<D>(S + nc * i);
-      if constexpr (outOfPlane()) {
-        Mat<3> kappa3 = Mat<3>::Zero(), S3 = Mat<3>::Zero();
-        kappa3.template topLeftCorner<2, 2>() = kappa;
-        S3.template topLeftCorner<2, 2>() = Si;
-        S3(2, 2) = zz_->data[i];
-        const Mat<3> R = m.rate(kappa3, S3) + inverse_lambda * S3;
-        packSymmetric<2>(R.template topLeftCorner<2, 2>(), dS + nc * i);
-        ctx.field_rates[slot_zz_][i] = R(2, 2);
+      if (implicit) {
+        packSymmetric<D>(m.linearRate(kappa, Si), dS + nc * i);
       } else {
-        packSymmetric<D>(m.rate(kappa, Si) + inverse_lambda * Si, dS + nc * i);
+        packSymmetric<D>(m.rate(kappa, Si) - m.linearRate(kappa, Si), dS + nc * i);
+        packSymmetric<D>(Si + solvent_viscosity_ * (kappa + kappa.transpose()), T + nc * i);
       }
-      packSymmetric<D>(Si + solvent_viscosity_ * (kappa + kappa.transpose()), T + nc * i);
     }
   }
 

@@ -45,21 +45,35 @@ struct RhsContext {
   // each [n_moving * components].
   double* const* field_rates;
   // The part of the right-hand side being evaluated. Only an effect whose implicit part is
-  // ImplicitPart::linear_relaxation reads it: it then writes only its explicit or only its
-  // implicit term. The system runs an ImplicitPart::all effect only for full and implicit_part.
+  // ImplicitPart::linear_rate reads it: it then writes only its explicit or only its implicit
+  // term. The system runs an ImplicitPart::all effect only for full and implicit_part.
   RhsPart part = RhsPart::full;
 };
 
 // What of an effect's contribution an implicit-explicit integrator (arkode-imex) treats
-// implicitly: a term linear in the velocities and evolving fields at frozen positions and
-// densities (docs/theory.md "Implicit-explicit integration"). An implicit term also frees the
-// explicit step from its stability limit (the viscous or the relaxation limit).
-//   none                the whole contribution is explicit (the default)
-//   all                 the whole contribution is implicit (the viscous term); its stability
-//                       inputs do not bound the explicit step
-//   linear_relaxation   the linear relaxation -S/lambda of an evolving stress is implicit, the
-//                       rest of the rate explicit; its relaxation time does not bound the step
-enum class ImplicitPart { none, all, linear_relaxation };
+// implicitly: terms linear in the velocities and evolving fields at frozen positions and
+// densities (docs/theory.md §9.4). An implicit term also frees the explicit step from its
+// stability limit.
+//   none         the whole contribution is explicit (the default)
+//   all          the whole contribution is implicit (the viscous force; the divergence of an
+//                evolving stress whose model is linear_rate); its stability inputs do not
+//                bound the explicit step
+//   shared       a field both parts read, itself linear in the velocities (the velocity
+//                gradient when a linear_rate model reads it): the effect runs in both parts
+//   linear_rate  an evolving stress whose rate splits into a part linear in the stress and the
+//                velocity gradient (Oldroyd-B, UCM: -S/lambda + (eta_p/lambda)(kappa + kappa^T))
+//                and the rest; the linear part is implicit. With the stress divergence implicit
+//                too, neither its relaxation time nor its elastic wave speed bounds the step
+enum class ImplicitPart { none, all, shared, linear_rate };
+
+// Whether some effect of the scene has an implicit linear stress rate (for the effects whose
+// implicit part follows from it: the velocity gradient and the stress divergence).
+template <class EffectList>
+bool hasLinearRateModel(const EffectList& effects) {
+  for (const auto* e : effects)
+    if (e->implicitPart() == ImplicitPart::linear_rate) return true;
+  return false;
+}
 
 // The pressure closure of the scheme (WCSPH: the equation of state). Walls use its
 // inverse to give their particles the density that matches the extrapolated pressure.
