@@ -54,6 +54,7 @@ class StressDivergence final : public PairEffect<D, StressDivergence<D>> {
     l.acc += (l.m[nb.j] * nb.F) * ((l.Si_over_rho2 + Sj * (inv_rho * inv_rho)) * nb.rij);
   }
   void end(const RhsContext<D>& ctx, Index i, Local& l) const {
+    if (ctx.part == RhsPart::implicit_diagonal) return;  // it depends on the stress, not on v_i
     for (int a = 0; a < D; ++a) ctx.dvdt[D * i + a] += l.acc[a];
   }
 

@@ -176,7 +176,8 @@ void SphSystem<D>::rhsPart(RhsPart part, double t, const double* y, double* ydot
   switch (part) {
     case RhsPart::full: evaluateWith(full_, part, t, y, ydot); break;
     case RhsPart::explicit_part: evaluateWith(explicit_, part, t, y, ydot); break;
-    case RhsPart::implicit_part: evaluateWith(implicit_, part, t, y, ydot); break;
+    case RhsPart::implicit_part:
+    case RhsPart::implicit_diagonal: evaluateWith(implicit_, part, t, y, ydot); break;
   }
 }
 
@@ -191,7 +192,8 @@ void SphSystem<D>::evaluateWith(const PhaseLists& lists, RhsPart part, double t,
   double* dvdt = ydot + n * (D + 1);
   // The implicit part has no position rate: dx/dt = v is explicit.
   const double* v = particles.velocity.data();
-  const double position_rate = part == RhsPart::implicit_part ? 0.0 : 1.0;
+  const bool implicit = part == RhsPart::implicit_part || part == RhsPart::implicit_diagonal;
+  const double position_rate = implicit ? 0.0 : 1.0;
 #pragma omp parallel for schedule(static) if (n >= kParallelMinimum)
   for (std::size_t i = 0; i < n; ++i) {
     for (int a = 0; a < D; ++a) {
@@ -216,7 +218,7 @@ void SphSystem<D>::evaluateWith(const PhaseLists& lists, RhsPart part, double t,
   particlePass(lists.external, ctx);
   // The stability inputs come from full and explicit evaluations (the implicit part's
   // velocities are Krylov directions within a linear solve, not states).
-  if (part == RhsPart::implicit_part) return;
+  if (implicit) return;
 
   double vmax2 = 0, amax2 = 0;
 #pragma omp parallel for reduction(max : vmax2, amax2) schedule(static) if (n >= kParallelMinimum)

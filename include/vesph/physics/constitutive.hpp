@@ -187,6 +187,15 @@ class ConstitutiveEffect : public Effect<D> {
     double* T = extra_->data.data();
     constexpr int nc = symmetricComponents<D>();
     const bool implicit = ctx.part == RhsPart::implicit_part;
+    if (ctx.part == RhsPart::implicit_diagonal) {
+      // The diagonal of the linear rate's stress block: L(0, S) with S = 1 in every component
+      // (exact for a rate diagonal in S, -S/lambda).
+      double diagonal[nc];
+      packSymmetric<D>(m.linearRate(Mat<D>::Zero(), Mat<D>::Ones()), diagonal);
+      for (std::size_t i = begin; i < end; ++i)
+        for (int c = 0; c < nc; ++c) dS[nc * i + c] = diagonal[c];
+      return;
+    }
     for (std::size_t i = begin; i < end; ++i) {
       const Eigen::Map<const Eigen::Matrix<double, D, D, Eigen::RowMajor>> kappa(k + D * D * i);
       const Mat<D> Si = unpackSymmetric<D>(S + nc * i);

@@ -44,9 +44,12 @@ struct RhsContext {
   // Rates of the evolving fields (elastic stresses), by the slot Setup::evolve returned;
   // each [n_moving * components].
   double* const* field_rates;
-  // The part of the right-hand side being evaluated. Only an effect whose implicit part is
+  // The part of the right-hand side being evaluated. An effect whose implicit part is
   // ImplicitPart::linear_rate reads it: it then writes only its explicit or only its implicit
-  // term. The system runs an ImplicitPart::all effect only for full and implicit_part.
+  // term. The system runs an ImplicitPart::all effect only for full and the implicit parts.
+  // Under implicit_diagonal every effect with an implicit part writes the diagonal of that
+  // part's Jacobian (with respect to its own particle's velocity or stress) instead of its
+  // rate, or nothing.
   RhsPart part = RhsPart::full;
 };
 

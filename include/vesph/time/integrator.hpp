@@ -2,8 +2,9 @@
 // The integrator interface (docs/architecture.md "Integrators"); building one from the scene
 // is vesph/time/integrator_factory.hpp. An integrator advances the ODE state
 // y' = f(t, y) of an OdeSystem; it owns time, the system owns physics. All integrators
-// respect the same explicit stability limits (stableStep) and call the system's afterStep
-// after every accepted step (post-step hooks, diagnostics, failure checks).
+// respect the same explicit stability limits (stepLimits; the implicit-explicit ones those of
+// the explicit part, OdeSystem::explicitStability) and call the system's afterStep after every
+// accepted step (post-step hooks, diagnostics, failure checks).
 #include <cstdint>
 #include <limits>
 #include <memory>
@@ -87,8 +88,10 @@ class OdeSystem {
   // segments().velocity_begin on (velocities, evolving fields) at frozen positions and
   // densities, and has no position or density rates. part == full is rhs(). A system that
   // declares no split has f_I = 0: everything explicit.
+  // implicit_diagonal writes the diagonal of f_I's Jacobian (velocity and evolving-field rows;
+  // zero elsewhere) instead of f_I.
   virtual void rhsPart(RhsPart part, double t, const double* y, double* ydot) {
-    if (part == RhsPart::implicit_part) {
+    if (part != RhsPart::full && part != RhsPart::explicit_part) {
       for (std::size_t k = 0, n = size(); k < n; ++k) ydot[k] = 0.0;
       return;
     }
