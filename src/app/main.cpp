@@ -132,6 +132,10 @@ int listAll() {
     std::printf("  %-24s order %d, %s, %d stages%s\n", t.name.c_str(), t.order,
                 t.embedding_order ? ("embedding order " + std::to_string(t.embedding_order)).c_str() : "no embedding",
                 t.stages, t.embedding_order ? "" : " (arkode-fixed only)");
+  std::cout << "IMEX pairs (integrator.table, for arkode-imex and arkode-imex-fixed; the pair's name or either table's):\n";
+  for (const auto& p : arkPairs())
+    std::printf("  %-24s order %d, embedding order %d, %d stages: %s + %s\n", p.name.c_str(), p.order, p.embedding_order,
+                p.stages, p.explicit_table.c_str(), p.implicit_table.c_str());
   std::cout << "kernels (particles.kernel):\n";
   for (const auto& k : kernelDescriptions()) std::printf("  %-20s %s\n", k.name, k.summary);
   std::cout << "pressure schemes (solver.scheme):\n";
@@ -182,6 +186,11 @@ int listJson() {
   for (const auto& t : erkTables())
     tables.push_back({{"name", t.name}, {"order", t.order}, {"embedding_order", t.embedding_order}, {"stages", t.stages}});
   out["butcher_tables"] = tables;
+  json pairs = json::array();
+  for (const auto& p : arkPairs())
+    pairs.push_back({{"name", p.name}, {"explicit_table", p.explicit_table}, {"implicit_table", p.implicit_table},
+                     {"order", p.order}, {"embedding_order", p.embedding_order}, {"stages", p.stages}});
+  out["imex_pairs"] = pairs;
   constexpr int kernel_table_intervals = 1200;
   json kernels = json::array();
   for (const auto& k : kernelDescriptions()) {

@@ -28,7 +28,12 @@ class StressDivergence final : public PairEffect<D, StressDivergence<D>> {
     full_ = stress_->components == D * D;
     if (!full_ && stress_->components != symmetricComponents<D>())
       throw std::logic_error("elastic_stress has an unexpected number of components");
+    // Implicit with a model whose linear rate is (Oldroyd-B, UCM): the elastic shear wave, the
+    // coupling of this term with (eta_p/lambda)(kappa + kappa^T), is then implicit as a whole
+    // (docs/theory.md §9.5). Linear in the evolving stress at frozen positions.
+    implicit_ = hasLinearRateModel(*s.effects) ? ImplicitPart::all : ImplicitPart::none;
   }
+  ImplicitPart implicitPart() const override { return implicit_; }
 
   struct Local {
     Vec<D> acc;
@@ -49,6 +54,7 @@ class StressDivergence final : public PairEffect<D, StressDivergence<D>> {
     l.acc += (l.m[nb.j] * nb.F) * ((l.Si_over_rho2 + Sj * (inv_rho * inv_rho)) * nb.rij);
   }
   void end(const RhsContext<D>& ctx, Index i, Local& l) const {
+    if (ctx.part == RhsPart::implicit_diagonal) return;  // it depends on the stress, not on v_i
     for (int a = 0; a < D; ++a) ctx.dvdt[D * i + a] += l.acc[a];
   }
 
@@ -59,6 +65,7 @@ class StressDivergence final : public PairEffect<D, StressDivergence<D>> {
   }
   const Field* stress_ = nullptr;
   bool full_ = false;
+  ImplicitPart implicit_ = ImplicitPart::none;
 };
 
 }  // namespace

@@ -18,7 +18,10 @@ class VelocityGradient final : public PairEffect<D, VelocityGradient<D>> {
   void setup(Setup<D>& s) override {
     kappa_ = &s.particles.fields.require("velocity_gradient", D * D, Field::Range::moving);
     wall_velocity_ = s.particles.fields.find("wall_velocity");
+    // The implicit part of an Oldroyd-B/UCM rate reads kappa (docs/theory.md §9.5).
+    implicit_ = hasLinearRateModel(*s.effects) ? ImplicitPart::shared : ImplicitPart::none;
   }
+  ImplicitPart implicitPart() const override { return implicit_; }
 
   struct Local {
     Eigen::Matrix<double, D, D> k;
@@ -53,6 +56,7 @@ class VelocityGradient final : public PairEffect<D, VelocityGradient<D>> {
     for (int a = 0; a < D; ++a)
       for (int b = 0; b < D; ++b) l.k(a, b) += w * (vj[a] - l.vi[a]) * nb.rij[b];
   }
+  ImplicitPart implicit_ = ImplicitPart::none;
   Field* kappa_ = nullptr;
   const Field* wall_velocity_ = nullptr;
 };

@@ -30,10 +30,17 @@ class Viscosity final : public PairEffect<D, Viscosity<D>> {
     mu_ = s.viscosity;
     nu_ = s.viscosity / s.rest_density;
     wall_velocity_ = s.particles.fields.find("wall_velocity");
+    zero_velocity_.assign(D * s.particles.size(), 0.0);
+  }
+  void resized(const ParticleSet<D>& particles, const ParticleRemap&) override {
+    zero_velocity_.assign(D * particles.size(), 0.0);
   }
   void stability(StabilityInputs& in) const override {
     in.kinematic_viscosity = std::max(in.kinematic_viscosity, nu_);
   }
+  // Linear in the velocities (the wall velocities are extrapolated from them): implicit under
+  // arkode-imex, which lifts the viscous step limit (docs/theory.md "Implicit-explicit integration").
+  ImplicitPart implicitPart() const override { return ImplicitPart::all; }
 
   // Array pointers live in the accumulator so that the pair loop keeps them in registers.
   struct Local {
@@ -50,6 +57,13 @@ class Viscosity final : public PairEffect<D, Viscosity<D>> {
     const ParticleSet<D>& p = ctx.particles;
     const double* fv = wall_velocity_ ? wall_velocity_->data.data() : p.velocity.data();
     const std::size_t fixed0 = wall_velocity_ ? p.n_moving : 0;
+    if (ctx.part == RhsPart::implicit_diagonal) {
+      // The Jacobian's diagonal d(dv_i/dt)/dv_i = sum_j w_ij (negative: F < 0) is the sum below
+      // with v_i = 1 and every v_j = 0 (the wall velocities' dependence on v_i through the
+      // extrapolation left out).
+      return {Vec<D>::Zero(), Vec<D>::Ones(), 2.0 * mu_ / p.density[i], zero_velocity_.data(), p.density.data(),
+              p.mass.data(), zero_velocity_.data(), 0};
+    }
     return {Vec<D>::Zero(), p.v(i), 2.0 * mu_ / p.density[i], p.velocity.data(), p.density.data(), p.mass.data(), fv, fixed0};
   }
   void pair(const RhsContext<D>&, Index, const Neighbour<D>& nb, Local& l) const {
@@ -71,6 +85,7 @@ class Viscosity final : public PairEffect<D, Viscosity<D>> {
 
   double mu_ = 0, nu_ = 0;
   const Field* wall_velocity_ = nullptr;
+  std::vector<double> zero_velocity_;  // all neighbour velocities, for the Jacobian's diagonal
 };
 
 }  // namespace

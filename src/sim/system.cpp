@@ -44,17 +44,26 @@ void SphSystem<D>::setup(double spacing, double rest_density, double viscosity, 
     if (f->range == Field::Range::fixed) throw std::logic_error("field " + f->name + " cannot evolve: it covers fixed particles only");
   field_rates_.assign(evolving_.size(), nullptr);
 
-  state_.clear(); gradients_.clear(); rates_.clear(); forces_.clear(); external_.clear();
+  full_.clear(); explicit_.clear(); implicit_.clear();
   stability_inputs_ = {};
+  explicit_stability_inputs_ = {};
   for (auto& e : effects) {
     e->stability(stability_inputs_);
-    switch (e->phase()) {
-      case Phase::state: state_.push_back(e.get()); break;
-      case Phase::gradients: gradients_.push_back(e.get()); break;
-      case Phase::rates: rates_.push_back(e.get()); break;
-      case Phase::forces: forces_.push_back(e.get()); break;
-      case Phase::external: external_.push_back(e.get()); break;
+    full_.add(e.get());
+    // The split of implicit-explicit integrators (docs/theory.md "Implicit-explicit
+    // integration"): each effect declares its implicit term; the limits of implicit terms do
+    // not bound the explicit step.
+    const ImplicitPart implicit = e->implicitPart();
+    if (implicit != ImplicitPart::all) {
+      explicit_.add(e.get());
+      const StabilityInputs before = explicit_stability_inputs_;
+      e->stability(explicit_stability_inputs_);
+      if (implicit == ImplicitPart::linear_rate) {
+        explicit_stability_inputs_.relaxation_time = before.relaxation_time;
+        explicit_stability_inputs_.elastic_wave_speed = before.elastic_wave_speed;
+      }
     }
+    if (implicit != ImplicitPart::none) implicit_.add(e.get());
     const bool pair_phase = e->phase() == Phase::gradients || e->phase() == Phase::forces;
     if (e->pairwise() != pair_phase)
       throw std::logic_error("effect " + std::string(e->name()) + " is in the wrong phase");
@@ -140,6 +149,17 @@ void SphSystem<D>::particlePass(const std::vector<Effect<D>*>& list, const RhsCo
 }
 
 template <int D>
+void SphSystem<D>::PhaseLists::add(Effect<D>* e) {
+  switch (e->phase()) {
+    case Phase::state: state.push_back(e); break;
+    case Phase::gradients: gradients.push_back(e); break;
+    case Phase::rates: rates.push_back(e); break;
+    case Phase::forces: forces.push_back(e); break;
+    case Phase::external: external.push_back(e); break;
+  }
+}
+
+template <int D>
 void SphSystem<D>::rhs(double t, const double* y, double* ydot) {
   ++rhs_evals_;
   evaluate(t, y, ydot);
@@ -147,6 +167,22 @@ void SphSystem<D>::rhs(double t, const double* y, double* ydot) {
 
 template <int D>
 void SphSystem<D>::evaluate(double t, const double* y, double* ydot) {
+  evaluateWith(full_, RhsPart::full, t, y, ydot);
+}
+
+template <int D>
+void SphSystem<D>::rhsPart(RhsPart part, double t, const double* y, double* ydot) {
+  ++rhs_evals_;
+  switch (part) {
+    case RhsPart::full: evaluateWith(full_, part, t, y, ydot); break;
+    case RhsPart::explicit_part: evaluateWith(explicit_, part, t, y, ydot); break;
+    case RhsPart::implicit_part:
+    case RhsPart::implicit_diagonal: evaluateWith(implicit_, part, t, y, ydot); break;
+  }
+}
+
+template <int D>
+void SphSystem<D>::evaluateWith(const PhaseLists& lists, RhsPart part, double t, const double* y, double* ydot) {
   unpack(y);
   if (neighbours.update(particles)) driver.prepare(neighbours);
 
@@ -154,11 +190,14 @@ void SphSystem<D>::evaluate(double t, const double* y, double* ydot) {
   double* dxdt = ydot;
   double* drhodt = ydot + n * D;
   double* dvdt = ydot + n * (D + 1);
+  // The implicit part has no position rate: dx/dt = v is explicit.
   const double* v = particles.velocity.data();
+  const bool implicit = part == RhsPart::implicit_part || part == RhsPart::implicit_diagonal;
+  const double position_rate = implicit ? 0.0 : 1.0;
 #pragma omp parallel for schedule(static) if (n >= kParallelMinimum)
   for (std::size_t i = 0; i < n; ++i) {
     for (int a = 0; a < D; ++a) {
-      dxdt[D * i + a] = v[D * i + a];
+      dxdt[D * i + a] = position_rate * v[D * i + a];
       dvdt[D * i + a] = 0.0;
     }
     drhodt[i] = 0.0;
@@ -170,13 +209,16 @@ void SphSystem<D>::evaluate(double t, const double* y, double* ydot) {
     off += n * evolving_[k]->components;
   }
 
-  const RhsContext<D> ctx{particles, kernel, domain, t, dxdt, drhodt, dvdt, field_rates_.data()};
-  particlePass(state_, ctx);
+  const RhsContext<D> ctx{particles, kernel, domain, t, dxdt, drhodt, dvdt, field_rates_.data(), part};
+  particlePass(lists.state, ctx);
   for (auto& b : boundaries) b->update(ctx, neighbours, driver);
-  driver.run(ctx, neighbours, gradients_);
-  particlePass(rates_, ctx);
-  driver.run(ctx, neighbours, forces_);
-  particlePass(external_, ctx);
+  driver.run(ctx, neighbours, lists.gradients);
+  particlePass(lists.rates, ctx);
+  driver.run(ctx, neighbours, lists.forces);
+  particlePass(lists.external, ctx);
+  // The stability inputs come from full and explicit evaluations (the implicit part's
+  // velocities are Krylov directions within a linear solve, not states).
+  if (implicit) return;
 
   double vmax2 = 0, amax2 = 0;
 #pragma omp parallel for reduction(max : vmax2, amax2) schedule(static) if (n >= kParallelMinimum)
@@ -190,7 +232,7 @@ void SphSystem<D>::evaluate(double t, const double* y, double* ydot) {
     amax2 = std::max(amax2, a2);
   }
   max_speed_ = std::sqrt(vmax2);
-  max_acceleration_ = std::sqrt(amax2);
+  (part == RhsPart::full ? max_acceleration_ : explicit_max_acceleration_) = std::sqrt(amax2);
 }
 
 template <int D>
@@ -203,6 +245,17 @@ StabilitySnapshot SphSystem<D>::stability() const {
   s.kinematic_viscosity = stability_inputs_.kinematic_viscosity;
   s.max_speed = max_speed_;
   s.max_acceleration = max_acceleration_;
+  return s;
+}
+
+template <int D>
+StabilitySnapshot SphSystem<D>::explicitStability() const {
+  StabilitySnapshot s = stability();
+  s.elastic_wave_speed = explicit_stability_inputs_.elastic_wave_speed;
+  s.relaxation_time = explicit_stability_inputs_.relaxation_time;
+  s.kinematic_viscosity = explicit_stability_inputs_.kinematic_viscosity;
+  s.sound_speed = explicit_stability_inputs_.sound_speed;
+  s.max_acceleration = explicit_max_acceleration_;
   return s;
 }
 

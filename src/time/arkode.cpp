@@ -24,10 +24,55 @@
 #include <cstdlib>
 #include <sstream>
 
+#include "sundials_support.hpp"
 #include "vesph/core/types.hpp"
 #include "vesph/time/integrator_factory.hpp"
 
 namespace vesph {
+
+N_Vector wrapState(double* y, std::size_t size, SUNContext context) {
+  const sunindextype n = static_cast<sunindextype>(size);
+  const int threads = omp_get_max_threads();
+  N_Vector v;
+  if (threads > 1 && size >= 4 * kParallelMinimum) {
+    v = N_VMake_OpenMP(n, y, threads, context);
+    N_VEnableFusedOps_OpenMP(v, SUNTRUE);
+  } else {
+    v = N_VMake_Serial(n, y, context);
+    N_VEnableFusedOps_Serial(v, SUNTRUE);
+  }
+  if (!v) throw std::runtime_error("N_VMake failed");
+  return v;
+}
+
+void fillTolerances(double* a, std::size_t nn, const StateSegments& s, const std::vector<double>& by_segment) {
+  for (std::size_t k = 0; k < nn; ++k) {
+    const bool pos = k >= s.position_begin && k < s.position_end;
+    const bool vel = k >= s.velocity_begin && k < s.velocity_end;
+    const bool stress = k >= s.velocity_end;
+    a[k] = pos ? by_segment[0] : vel ? by_segment[2] : stress ? by_segment[3] : by_segment[1];
+  }
+}
+
+ErrorTolerances readTolerances(ConfigTable& cfg, const ReferenceScales& s) {
+  const double rtol = cfg.numberIn("rtol", 1e-4, 1e-14, 0.5);
+  // Default absolute tolerances: rtol times the scale of each field (dx for positions,
+  // rho0*delta for densities, the reference velocity for velocities).
+  const double vref = cfg.optionalNumber("reference_velocity", Bound::positive, "m/s").value_or(s.velocity);
+  if (!(vref > 0) && !cfg.has("atol_velocity"))
+    cfg.fail("reference_velocity", "the expected flow speed in m/s (for the default velocity tolerance atol_velocity = rtol * reference_velocity); "
+                                   "no sound-speed rule, inflow or initial fluid velocity gives one in this scene");
+  const double atol_x = cfg.number("atol_position", rtol * s.spacing, Bound::positive, "m");
+  const double atol_rho = cfg.number("atol_density", rtol * s.density * s.density_variation, Bound::positive, "kg/m^3");
+  const double atol_v = cfg.number("atol_velocity", rtol * vref, Bound::positive, "m/s");
+  // Elastic stresses (when a model evolves them): rtol times the stress scale the model
+  // declared (polymer viscosity * reference velocity / reference length).
+  double atol_s = 1.0;  // unused when no stress evolves
+  if (s.stress > 0) atol_s = cfg.number("atol_stress", rtol * s.stress, Bound::positive, "Pa");
+  else if (cfg.optionalNumber("atol_stress", Bound::positive, "Pa"))
+    cfg.fail("atol_stress", "no atol_stress: no effect of this scene evolves a stress");
+  return {rtol, {atol_x, atol_rho, atol_v, atol_s}};
+}
 
 const std::vector<ButcherTableInfo>& erkTables() {
   static const std::vector<ButcherTableInfo> tables = [] {
@@ -166,34 +211,13 @@ class ArkodeErk final : public Integrator {
 
   // N_Vector over the system's state buffer (no copy): the OpenMP vector with fused operations
   // for large states when threads are available.
-  N_Vector wrap(double* y) {
-    const sunindextype n = static_cast<sunindextype>(sys_->size());
-    const int threads = omp_get_max_threads();
-    N_Vector v;
-    if (threads > 1 && static_cast<std::size_t>(n) >= 4 * kParallelMinimum) {
-      v = N_VMake_OpenMP(n, y, threads, sunctx_);
-      N_VEnableFusedOps_OpenMP(v, SUNTRUE);
-    } else {
-      v = N_VMake_Serial(n, y, sunctx_);
-      N_VEnableFusedOps_Serial(v, SUNTRUE);
-    }
-    if (!v) throw std::runtime_error("N_VMake failed");
-    return v;
-  }
+  N_Vector wrap(double* y) { return wrapState(y, sys_->size(), sunctx_); }
 
   // Per-field absolute tolerances (vector abstol) over the state segments.
   void setTolerances() {
     if (atol_) N_VDestroy(atol_);
     atol_ = N_VClone(y_);
-    double* a = N_VGetArrayPointer(atol_);
-    const StateSegments s = sys_->segments();
-    const std::size_t nn = sys_->size();
-    for (std::size_t k = 0; k < nn; ++k) {
-      const bool pos = k >= s.position_begin && k < s.position_end;
-      const bool vel = k >= s.velocity_begin && k < s.velocity_end;
-      const bool stress = k >= s.velocity_end;
-      a[k] = pos ? atol_segments_[0] : vel ? atol_segments_[2] : stress ? atol_segments_[3] : atol_segments_[1];
-    }
+    fillTolerances(N_VGetArrayPointer(atol_), sys_->size(), sys_->segments(), atol_segments_);
     check(ERKStepSVtolerances(mem_, rtol_, atol_), "SVtolerances");
   }
 
@@ -282,24 +306,9 @@ const ButcherTableInfo& tableFromConfig(ConfigTable& cfg, bool adaptive) {
 
 std::unique_ptr<Integrator> makeArkode(ConfigTable& cfg, const StepControl& c, const ReferenceScales& s) {
   const ButcherTableInfo& table = tableFromConfig(cfg, true);
-  const double rtol = cfg.numberIn("rtol", 1e-4, 1e-14, 0.5);
-  // Default absolute tolerances: rtol times the scale of each field (dx for positions,
-  // rho0*delta for densities, the reference velocity for velocities).
-  const double vref = cfg.optionalNumber("reference_velocity", Bound::positive, "m/s").value_or(s.velocity);
-  if (!(vref > 0) && !cfg.has("atol_velocity"))
-    cfg.fail("reference_velocity", "the expected flow speed in m/s (for the default velocity tolerance atol_velocity = rtol * reference_velocity); "
-                                   "no sound-speed rule, inflow or initial fluid velocity gives one in this scene");
-  const double atol_x = cfg.number("atol_position", rtol * s.spacing, Bound::positive, "m");
-  const double atol_rho = cfg.number("atol_density", rtol * s.density * s.density_variation, Bound::positive, "kg/m^3");
-  const double atol_v = cfg.number("atol_velocity", rtol * vref, Bound::positive, "m/s");
-  // Elastic stresses (when a model evolves them): rtol times the stress scale the model
-  // declared (polymer viscosity * reference velocity / reference length).
-  double atol_s = 1.0;  // unused when no stress evolves
-  if (s.stress > 0) atol_s = cfg.number("atol_stress", rtol * s.stress, Bound::positive, "Pa");
-  else if (cfg.optionalNumber("atol_stress", Bound::positive, "Pa"))
-    cfg.fail("atol_stress", "no atol_stress: no effect of this scene evolves a stress");
+  const ErrorTolerances tol = readTolerances(cfg, s);
   const double h0 = cfg.optionalNumber("initial_step", Bound::positive, "s").value_or(0.0);
-  return std::make_unique<ArkodeErk>(true, table, c, rtol, std::vector<double>{atol_x, atol_rho, atol_v, atol_s}, h0);
+  return std::make_unique<ArkodeErk>(true, table, c, tol.rtol, tol.atol_by_segment, h0);
 }
 
 std::unique_ptr<Integrator> makeArkodeFixed(ConfigTable& cfg, const StepControl& c, const ReferenceScales&) {

@@ -30,6 +30,14 @@ enum class ParticleKind : std::uint8_t {
   inflow = 3,  // inflow buffer particles (prescribed motion)
 };
 
+// Which part of the right-hand side f = f_E + f_I an evaluation computes: all of it, the
+// explicit (non-stiff) part or the implicit (stiff, linear) part of an implicit-explicit
+// integrator (docs/theory.md §9.5). Each effect declares its implicit part
+// (Effect::implicitPart). implicit_diagonal: instead of the implicit part's rates, the diagonal
+// of its Jacobian with respect to the velocities and evolving fields at the given positions
+// (the IMEX integrator's Jacobi preconditioner).
+enum class RhsPart : std::uint8_t { full, explicit_part, implicit_part, implicit_diagonal };
+
 // Invalid user input (scene, command line). Exit code 2.
 struct InputError : std::runtime_error {
   using std::runtime_error::runtime_error;

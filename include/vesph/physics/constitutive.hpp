@@ -76,6 +76,11 @@ constexpr bool hasOutOfPlaneStress() {
 //     modulus G = eta_p/lambda for the elastic wave speed)
 // and optionally
 //   double shortestRelaxationTime() const   the relaxation step limit's time (default lambda)
+//   Mat<D> linearRate(const Mat<D>& kappa, const Mat<D>& S) const   the part of the rate
+//     linear in kappa and S (Oldroyd-B: -S/lambda + (eta_p/lambda)(kappa + kappa^T)), for
+//     implicit-explicit integrators: the effect's implicit part is then that term and its
+//     explicit part the rest of the rate (ImplicitPart::linear_rate; docs/theory.md §9.5).
+//     Models whose relaxation is nonlinear in S (XPP) stay explicit.
 template <int D, class Model>
 class ConstitutiveEffect : public Effect<D> {
  public:
@@ -118,12 +123,22 @@ class ConstitutiveEffect : public Effect<D> {
     if (shortest > 0) in.relaxation_time = in.relaxation_time > 0 ? std::min(in.relaxation_time, shortest) : shortest;
   }
 
+  ImplicitPart implicitPart() const override {
+    return hasLinearRate() ? ImplicitPart::linear_rate : ImplicitPart::none;
+  }
+
   double stressScale(double velocity, double length) const override {
     return static_cast<const Model&>(*this).polymerViscosity() * velocity / length;
   }
 
   void particles(const RhsContext<D>& ctx, std::size_t begin, std::size_t end) const override {
     const Model& m = static_cast<const Model&>(*this);
+    if constexpr (hasLinearRate()) {
+      if (ctx.part != RhsPart::full) {
+        splitParticles(ctx, begin, end);
+        return;
+      }
+    }
     const double* k = kappa_->data.data();
     const double* S = stress_->data.data();
     double* dS = ctx.field_rates[slot_];
@@ -152,6 +167,44 @@ class ConstitutiveEffect : public Effect<D> {
       std::ostringstream os;
       os << e.what() << " (fluid particle id " << ctx.particles.id[i] << " at t = " << ctx.time << " s)";
       throw NumericalFailure(os.str());
+    }
+  }
+
+ protected:
+  static constexpr bool hasLinearRate() {
+    return !outOfPlane() && requires(const Model& m, const Mat<D>& k) { m.linearRate(k, k); };
+  }
+
+ private:
+  // One part of the rate of a model with a linear part L(kappa, S): the implicit part is L, the
+  // explicit part the rest of the rate (rate - L); their sum is the rate to round-off. The
+  // extra stress for output is written by the explicit part.
+  void splitParticles(const RhsContext<D>& ctx, std::size_t begin, std::size_t end) const {
+    const Model& m = static_cast<const Model&>(*this);
+    const double* k = kappa_->data.data();
+    const double* S = stress_->data.data();
+    double* dS = ctx.field_rates[slot_];
+    double* T = extra_->data.data();
+    constexpr int nc = symmetricComponents<D>();
+    const bool implicit = ctx.part == RhsPart::implicit_part;
+    if (ctx.part == RhsPart::implicit_diagonal) {
+      // The diagonal of the linear rate's stress block: L(0, S) with S = 1 in every component
+      // (exact for a rate diagonal in S, -S/lambda).
+      double diagonal[nc];
+      packSymmetric<D>(m.linearRate(Mat<D>::Zero(), Mat<D>::Ones()), diagonal);
+      for (std::size_t i = begin; i < end; ++i)
+        for (int c = 0; c < nc; ++c) dS[nc * i + c] = diagonal[c];
+      return;
+    }
+    for (std::size_t i = begin; i < end; ++i) {
+      const Eigen::Map<const Eigen::Matrix<double, D, D, Eigen::RowMajor>> kappa(k + D * D * i);
+      const Mat<D> Si = unpackSymmetric<D>(S + nc * i);
+      if (implicit) {
+        packSymmetric<D>(m.linearRate(kappa, Si), dS + nc * i);
+      } else {
+        packSymmetric<D>(m.rate(kappa, Si) - m.linearRate(kappa, Si), dS + nc * i);
+        packSymmetric<D>(Si + solvent_viscosity_ * (kappa + kappa.transpose()), T + nc * i);
+      }
     }
   }
 

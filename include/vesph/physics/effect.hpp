@@ -44,7 +44,39 @@ struct RhsContext {
   // Rates of the evolving fields (elastic stresses), by the slot Setup::evolve returned;
   // each [n_moving * components].
   double* const* field_rates;
+  // The part of the right-hand side being evaluated. An effect whose implicit part is
+  // ImplicitPart::linear_rate reads it: it then writes only its explicit or only its implicit
+  // term. The system runs an ImplicitPart::all effect only for full and the implicit parts.
+  // Under implicit_diagonal every effect with an implicit part writes the diagonal of that
+  // part's Jacobian (with respect to its own particle's velocity or stress) instead of its
+  // rate, or nothing.
+  RhsPart part = RhsPart::full;
 };
+
+// What of an effect's contribution an implicit-explicit integrator (arkode-imex) treats
+// implicitly: terms linear in the velocities and evolving fields at frozen positions and
+// densities (docs/theory.md §9.5). An implicit term also frees the explicit step from its
+// stability limit.
+//   none         the whole contribution is explicit (the default)
+//   all          the whole contribution is implicit (the viscous force; the divergence of an
+//                evolving stress whose model is linear_rate); its stability inputs do not
+//                bound the explicit step
+//   shared       a field both parts read, itself linear in the velocities (the velocity
+//                gradient when a linear_rate model reads it): the effect runs in both parts
+//   linear_rate  an evolving stress whose rate splits into a part linear in the stress and the
+//                velocity gradient (Oldroyd-B, UCM: -S/lambda + (eta_p/lambda)(kappa + kappa^T))
+//                and the rest; the linear part is implicit. With the stress divergence implicit
+//                too, neither its relaxation time nor its elastic wave speed bounds the step
+enum class ImplicitPart { none, all, shared, linear_rate };
+
+// Whether some effect of the scene has an implicit linear stress rate (for the effects whose
+// implicit part follows from it: the velocity gradient and the stress divergence).
+template <class EffectList>
+bool hasLinearRateModel(const EffectList& effects) {
+  for (const auto* e : effects)
+    if (e->implicitPart() == ImplicitPart::linear_rate) return true;
+  return false;
+}
 
 // The pressure closure of the scheme (WCSPH: the equation of state). Walls use its
 // inverse to give their particles the density that matches the extrapolated pressure.
@@ -143,6 +175,8 @@ class Effect {
   // If this effect is the scheme's pressure closure, return it.
   virtual const PressureModel* pressureModel() const { return nullptr; }
   virtual void stability(StabilityInputs& in) const {}
+  // The term an implicit-explicit integrator may treat implicitly (see ImplicitPart).
+  virtual ImplicitPart implicitPart() const { return ImplicitPart::none; }
   // The scale of the stress an evolving model produces at velocity V over length L (Pa), for
   // default error-control tolerances; 0 when the effect evolves no stress.
   virtual double stressScale(double velocity, double length) const { return 0.0; }

@@ -31,6 +31,8 @@ class IntegratedSystem final : public OdeSystem {
   StateSegments segments() const override { return system_.segments(); }
   void rhs(double t, const double* y, double* ydot) override { system_.rhs(t, y, ydot); }
   StabilitySnapshot stability() const override { return system_.stability(); }
+  void rhsPart(RhsPart part, double t, const double* y, double* ydot) override { system_.rhsPart(part, t, y, ydot); }
+  StabilitySnapshot explicitStability() const override { return system_.explicitStability(); }
   bool afterStep(double t, double dt, double* y) override {
     system_.afterStep(t, dt, y);
     return observer_.accepted(t, dt, y);

@@ -53,6 +53,13 @@ class SphSystem final : public OdeSystem, public StateEvaluator {
   // The same evaluation without counting it (derived fields for output, tests, hooks).
   void evaluate(double t, const double* y, double* ydot) override;
   StabilitySnapshot stability() const override;
+  // One part of the right-hand side for implicit-explicit integrators (OdeSystem::rhsPart):
+  // the explicit part runs every effect except those whose whole contribution is implicit
+  // (Effect::implicitPart), the implicit part only the effects with an implicit term, after
+  // the boundaries' wall values. Counted in rhsEvaluations. The full rhs is their sum.
+  void rhsPart(RhsPart part, double t, const double* y, double* ydot) override;
+  // The stability inputs without those of the implicit terms, at the last explicit evaluation.
+  StabilitySnapshot explicitStability() const override;
 
   // What the hooks see of the system (vesph/physics/step_hook.hpp). A system also converts to
   // it, so that code handing the system itself to a hook (tests: proj.apply(sys, ...)) reads as
@@ -98,17 +105,26 @@ class SphSystem final : public OdeSystem, public StateEvaluator {
   std::uint64_t rhsEvaluations() const { return rhs_evals_; }
 
  private:
+  // The effects of each phase that one part of the right-hand side runs.
+  struct PhaseLists {
+    std::vector<Effect<D>*> state, gradients, rates, forces, external;
+    void clear() { state.clear(); gradients.clear(); rates.clear(); forces.clear(); external.clear(); }
+    void add(Effect<D>* e);
+  };
+  void evaluateWith(const PhaseLists& lists, RhsPart part, double t, const double* y, double* ydot);
   void particlePass(const std::vector<Effect<D>*>& list, const RhsContext<D>& ctx);
   // remap_ applied to the particle set, effects, boundaries, hooks and the neighbour structures.
   void applyRemap();
 
-  std::vector<Effect<D>*> state_, gradients_, rates_, forces_, external_;
+  PhaseLists full_, explicit_, implicit_;
   std::vector<Field*> evolving_;
   std::vector<double*> field_rates_;
   StabilityInputs stability_inputs_;
+  StabilityInputs explicit_stability_inputs_;  // without the implicit terms' inputs
   const PressureModel* pressure_model_ = nullptr;
   Vec<D> body_acceleration_ = Vec<D>::Zero();
   double max_speed_ = 0, max_acceleration_ = 0;
+  double explicit_max_acceleration_ = 0;  // of the explicit part, at its last evaluation
   std::uint64_t rhs_evals_ = 0;
   std::uint64_t next_id_ = 0;
   ParticleChanges changes_;

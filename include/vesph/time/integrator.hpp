@@ -2,13 +2,16 @@
 // The integrator interface (docs/architecture.md "Integrators"); building one from the scene
 // is vesph/time/integrator_factory.hpp. An integrator advances the ODE state
 // y' = f(t, y) of an OdeSystem; it owns time, the system owns physics. All integrators
-// respect the same explicit stability limits (stableStep) and call the system's afterStep
-// after every accepted step (post-step hooks, diagnostics, failure checks).
+// respect the same explicit stability limits (stepLimits; the implicit-explicit ones those of
+// the explicit part, OdeSystem::explicitStability) and call the system's afterStep after every
+// accepted step (post-step hooks, diagnostics, failure checks).
 #include <cstdint>
 #include <limits>
 #include <memory>
 #include <string>
 #include <vector>
+
+#include "vesph/core/types.hpp"
 
 namespace vesph {
 
@@ -84,6 +87,23 @@ class OdeSystem {
   virtual StateSegments segments() const = 0;
   virtual void rhs(double t, const double* y, double* ydot) = 0;
   virtual StabilitySnapshot stability() const = 0;
+  // Implicit-explicit integrators (arkode-imex, docs/theory.md "Implicit-explicit
+  // integration"): f = f_E + f_I, where f_I (implicit_part) is linear in the values from
+  // segments().velocity_begin on (velocities, evolving fields) at frozen positions and
+  // densities, and has no position or density rates. part == full is rhs(). A system that
+  // declares no split has f_I = 0: everything explicit.
+  // implicit_diagonal writes the diagonal of f_I's Jacobian (velocity and evolving-field rows;
+  // zero elsewhere) instead of f_I.
+  virtual void rhsPart(RhsPart part, double t, const double* y, double* ydot) {
+    if (part != RhsPart::full && part != RhsPart::explicit_part) {
+      for (std::size_t k = 0, n = size(); k < n; ++k) ydot[k] = 0.0;
+      return;
+    }
+    rhs(t, y, ydot);
+  }
+  // The stability inputs of the explicit part f_E alone, at its last evaluation: the limits of
+  // terms in f_I (viscous, relaxation) are absent. Same as stability() without a split.
+  virtual StabilitySnapshot explicitStability() const { return stability(); }
   // Called after each accepted step with the new state; returns false to stop the run.
   virtual bool afterStep(double t, double dt, double* y) = 0;
   // Whether afterStep may change the state (a post-step projection): the fixed-step
@@ -142,5 +162,14 @@ struct ButcherTableInfo {
   int order, embedding_order, stages;
 };
 const std::vector<ButcherTableInfo>& erkTables();
+
+// The additive (IMEX) Runge-Kutta pairs of SUNDIALS 6.4.1 for arkode-imex (integrator.table):
+// the pair's name, its explicit and implicit tables (without the ARKODE_ prefix), order q,
+// embedding order p and stages.
+struct ArkPairInfo {
+  std::string name, explicit_table, implicit_table;
+  int order, embedding_order, stages;
+};
+const std::vector<ArkPairInfo>& arkPairs();
 
 }  // namespace vesph

@@ -14,6 +14,9 @@ struct IntegratorEntry {
   std::string name;
   std::string summary;
   std::unique_ptr<Integrator> (*make)(ConfigTable& cfg, const StepControl& control, const ReferenceScales& scales);
+  // Error-controlled step (the stability limits only cap it): no integrator.step, and the
+  // limit coefficients may exceed the fixed-step range.
+  bool adaptive = false;
   // The integrator's own default CFL coefficient under WCSPH, when its stability range differs
   // from the predictor-correctors' (0: the pressure scheme's default, kWcsphDefaultCfl).
   double wcsph_default_cfl = 0;

@@ -34,6 +34,11 @@ class OldroydB : public ConstitutiveEffect<D, OldroydB<D>> {
   }
   double polymerViscosity() const { return rate_.eta_p; }
   double relaxationTime() const { return rate_.lambda; }
+  // The part of the rate linear in kappa and S, implicit under arkode-imex (ConstitutiveEffect).
+  template <class K>
+  Mat<D> linearRate(const K& kappa, const Mat<D>& S) const {
+    return rate_.template linearPart<D>(kappa, S);
+  }
 
  private:
   bool ucm_;

@@ -16,6 +16,12 @@ struct OldroydBRate {
   Mat<D> operator()(const K& kappa, const Mat<D>& S) const {
     return kappa * S + S * kappa.transpose() - S / lambda + (eta_p / lambda) * (kappa + kappa.transpose());
   }
+  // The part linear in kappa and S: relaxation and polymer stretching by the flow
+  // (implicit under arkode-imex, docs/theory.md §9.5).
+  template <int D, class K>
+  Mat<D> linearPart(const K& kappa, const Mat<D>& S) const {
+    return -S / lambda + (eta_p / lambda) * (kappa + kappa.transpose());
+  }
 };
 
 }  // namespace vesph
