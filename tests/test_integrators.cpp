@@ -464,13 +464,16 @@ TEST_CASE("integrators: the IMEX split is exact and frees the step from the visc
 TEST_CASE("integrators: every constitutive model runs under arkode-imex and matches an explicit run") {
   // A short start-up of each model's channel, once with the explicit adaptive 'arkode' and
   // once with 'arkode-imex', both at rtol = 1e-6: the velocities (and elastic stresses) agree
-  // to 1e-5 of their largest value (measured: at most 4e-7, the UCM stresses).
+  // to 1e-5 of their largest value (measured: at most 4e-7, the UCM stresses). The
+  // second-order fluid's start-up is explicit in both (only its viscous term is implicit) and
+  // takes the step of its stiff rate: 0.25 ms is about 300 steps (half the test's time at 0.5 ms,
+  // most of it under the sanitizer build of tools/run-tests.sh).
   struct Case {
     const char* scene;
     const char* end;
   };
   const Case cases[] = {{"poiseuille_newtonian", "0.05"},
-                        {"startup_channel_second_order_fluid", "0.0005"},
+                        {"startup_channel_second_order_fluid", "0.00025"},
                         {"startup_channel_oldroyd_b", "0.05"},
                         {"startup_channel_ucm", "0.05"},
                         {"startup_channel_xpp", "0.05"}};

@@ -34,7 +34,7 @@ struct Block {
   bool centroid = false;   // image wall: extrapolate from the centroid of P's weights
   double pressure_floor = -std::numeric_limits<double>::infinity();  // dummy wall, Pa
   bool hydrostatic = false;              // fluid: hydrostatic initial density
-  std::optional<double> surface_height;  // its free surface, m along -g (absent: the block's top)
+  std::optional<double> surface_height{};  // its free surface, m along -g (absent: the block's top)
 };
 
 template <int D>
