@@ -2,6 +2,7 @@
 docs/validation.md), in SI units:
 
 * analytic_velocity: transient plane Poiseuille flow from rest (Newtonian, series solution);
+* couette_startup: start-up of plane Couette flow, one wall set moving (Newtonian, series);
 * waters_king: Waters & King's start-up of Oldroyd-B channel flow (dimensionless);
 * coefficients, steady_stresses, startup_velocity: the second-order fluid in channel flow;
 * Xpp, steady_shear, steady_shear_ode, channel_reference, startup_1d: the extended Pom-Pom
@@ -68,6 +69,35 @@ def analytic_velocity(y, t, F, nu, H, y0=0.0):
         if n0 > 10_000_000:   # only reachable for absurdly small t
             break
     out = steady - total
+    return float(out[0]) if scalar else out
+
+
+# --------------------------------------------------------------- plane Couette start-up
+def couette_startup(s, t, U, nu, H):
+    """Start-up of plane Couette flow [m/s]: fluid at rest between a wall at rest (s = 0) and a
+    wall set moving at U along the channel at t = 0 (s = H):
+
+        u(s, t) = U s/H + (2U/pi) sum_{n>=1} ((-1)^n / n) sin(n pi s/H) exp(-n^2 pi^2 nu t / H^2)
+
+    s: distance(s) from the wall at rest [m]; t >= 0 [s]; nu [m^2/s]; H [m]. The series is
+    summed until exp(-n^2 pi^2 nu t/H^2)/n < 1e-16 (at least 64 terms); at t = 0 the initial
+    state (0 for s < H) is returned. Float for scalar s, else an array shaped like s.
+    """
+    if t < 0 or nu <= 0 or H <= 0:
+        raise ValueError("couette_startup: t >= 0, nu > 0 and H > 0")
+    s = np.asarray(s, dtype=np.float64)
+    scalar = s.ndim == 0
+    s = np.atleast_1d(s)
+    if t == 0.0:
+        out = np.where(s >= H, U, 0.0)
+        return float(out[0]) if scalar else out
+    decay = math.pi ** 2 * nu * t / (H * H)
+    nmax = 64
+    while math.exp(-nmax * nmax * decay) / nmax >= 1e-16 and nmax < 1_000_000:
+        nmax *= 2
+    n = np.arange(1, nmax + 1, dtype=np.float64)
+    coef = (2.0 * U / math.pi) * (-1.0) ** n / n * np.exp(-n * n * decay)
+    out = U * s / H + np.sin(np.outer(s, n) * (math.pi / H)) @ coef
     return float(out[0]) if scalar else out
 
 
