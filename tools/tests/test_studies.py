@@ -1,11 +1,12 @@
 """die_swell_study (vesph.studies.die_swell): the scenes of every study, the tabulation of two
-synthetic runs and the bad-argument errors."""
+synthetic runs and the bad-argument errors; peer_dam_break's integrator specifications."""
 import json
 import os
+import subprocess
 
 import numpy as np
 
-from support import (DS_DX, DS_EXIT, DS_W, expect, load_tests_of, read_csv_rows, tool,
+from support import (DS_DX, DS_EXIT, DS_W, TOOLS, expect, load_tests_of, read_csv_rows, tool,
                      write_die_swell)
 
 
@@ -198,5 +199,30 @@ def make_die_swell_study_tests(tmp):
             ("die_swell_study: bad arguments", bad_arguments)]
 
 
+def make_peer_dam_break_tests(tmp):
+    from vesph.studies import peer_dam_break as pdb
+
+    def integrator_specifications():
+        expect(pdb.parse_integrator("leapfrog") == ['integrator.type="leapfrog"'], "plain type")
+        expect(pdb.parse_integrator("arkode:BOGACKI_SHAMPINE_4_2_3@1")
+               == ['integrator.type="arkode"', 'integrator.table="BOGACKI_SHAMPINE_4_2_3"', "integrator.cfl=1.0"],
+               f"type, table and cfl: {pdb.parse_integrator('arkode:BOGACKI_SHAMPINE_4_2_3@1')}")
+        expect(pdb.parse_integrator("symplectic@0.25") == ['integrator.type="symplectic"', "integrator.cfl=0.25"],
+               "type and cfl")
+        for bad in ("arkode:", "symplectic@", "@1", "leapfrog@-1", "leapfrog@x"):
+            try:
+                pdb.parse_integrator(bad)
+            except ValueError:
+                continue
+            raise AssertionError(f"{bad!r} accepted")
+        p = subprocess.run([os.path.join(TOOLS, "vesph-post"), "peer_dam_break", "--integrator", "leapfrog,arkode:",
+                            "--size", "ci"], capture_output=True, text=True)
+        expect(p.returncode == 2 and "TYPE[:TABLE][@CFL]" in p.stderr,
+               f"a malformed --integrator: exit {p.returncode}", p.stdout + p.stderr)
+
+    return [("peer_dam_break: integrator specifications TYPE[:TABLE][@CFL] and their errors",
+             integrator_specifications)]
+
+
 # unittest collects the groups above through load_tests
-load_tests = load_tests_of(make_die_swell_study_tests)
+load_tests = load_tests_of(make_die_swell_study_tests, make_peer_dam_break_tests)
