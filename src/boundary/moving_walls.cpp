@@ -152,6 +152,10 @@ void buildMovingWalls(BoundaryBuild<D>& b) {
     if (t.has("ramp_time")) m.ramp_time = t.number("ramp_time", std::nullopt, Bound::nonnegative, "s");
     for (int a = 0; a < D; ++a)
       if (!std::isfinite(m.velocity[a])) t.fail("velocity", "a finite velocity, m/s");
+    for (int a = 0; a < 3; ++a)
+      if (!std::isfinite(m.angular_velocity[a])) t.fail("angular_velocity", "a finite angular velocity, rad/s");
+    for (int a = 0; a < D; ++a)
+      if (!std::isfinite(m.axis_point[a])) t.fail("axis_point", "a finite point, m");
     if (!m.rotates() && m.velocity.squaredNorm() == 0) {  // at rest: a plain wall
       if (t.has("ramp_time"))
         t.fail("ramp_time", "no ramp_time on a wall at rest (give the wall a velocity or an angular_velocity)");
@@ -167,16 +171,19 @@ void buildMovingWalls(BoundaryBuild<D>& b) {
   for (std::size_t k = 0; k < b.particles.nFixed(); ++k)
     for (int a = 0; a < D; ++a) reference[D * k + a] = b.particles.position[D * (n0 + k) + a];
   for (const WallMotion<D>& m : motions) {
-    // The fastest wall point at full speed, over the block's reference positions (the motion is
-    // rigid, so this bound holds at every time): the velocity scale of a fluid at rest.
+    // A bound of the wall speed at every time, |U| + max |omega x r| over the block (|omega x r|
+    // is kept by the rotation about omega): the velocity scale of a fluid at rest.
+    double spin = 0;
     for (std::size_t k = m.first; k < m.first + m.count; ++k) {
       Vec<D> x0, x, u, a;
       for (int c = 0; c < D; ++c) x0[c] = reference[D * k + c];
-      WallMotion<D> full = m;
-      full.ramp_time = 0;
-      MovingWalls<D>::kinematics(full, 0.0, x0, x, u, a);
-      b.facts.prescribed_peak_speed = std::max(b.facts.prescribed_peak_speed, u.norm());
+      WallMotion<D> rotation = m;
+      rotation.ramp_time = 0;
+      rotation.velocity.setZero();
+      MovingWalls<D>::kinematics(rotation, 0.0, x0, x, u, a);
+      spin = std::max(spin, u.norm());
     }
+    b.facts.prescribed_peak_speed = std::max(b.facts.prescribed_peak_speed, m.velocity.norm() + spin);
   }
   b.boundaries.push_back(std::make_unique<MovingWalls<D>>(std::move(motions), std::move(reference), b.domain));
 }

@@ -1,6 +1,6 @@
 # Moving walls (docs/validation.md §15): the start-up of plane Couette flow against the analytic
 # series (max error below 1 % of the wall speed at t = 0.025, 0.05, 0.1, 0.25 s) under the
-# leapfrog and ARKODE, and with ISPH over its first 0.05 s; the spin-up of a fluid in a
+# leapfrog and ARKODE, with ISPH over its first 0.05 s and with translating image walls; the spin-up of a fluid in a
 # rotating closed box toward solid-body rotation (below 0.1 % of omega L/2 at t = 0.2 s, still
 # above 30 % at 0.01 s, the deviation's decay rate within 5 % of the square's slowest Stokes
 # mode), also split in two by a resume (the walls' motion continues from the resumed time);
@@ -22,6 +22,15 @@ printf '\n[solver]\nscheme = "isph"\nlinear_solver = "umfpack"\n' >> "$WORK/coue
 expect 0 "ok: finished" -- "$VESPH" run "$WORK/couette_isph.toml" -o "$WORK/c-isph" --quiet --set time.end=0.05 --set "output.times=[0.025, 0.05]"
 "$POST" couette_check "$WORK/c-isph/couette_isph.h5" --times 0.025 0.05 --tolerance 0.01 >"$WORK/check.log" 2>&1 \
   && pass || fail "ISPH: Couette start-up: $(cat "$WORK/check.log")"
+cat "$WORK/check.log"
+# Image walls (Fang's boundary + image particles, translating): the image-wall channel with the
+# body force off and its upper wall sliding at U.
+expect 0 "ok: finished" -- "$VESPH" run "$SRC/cases/poiseuille_newtonian_image_walls.toml" -o "$WORK/c-image" --quiet \
+  --set "effects.body_force.acceleration=[0.0, 0.0]" --set "blocks[2].velocity=[1.0e-3, 0.0]" \
+  --set "effects.equation_of_state.sound_speed={phi = 4.0, delta = 0.01, velocity = 1.0e-3, length = 1.0e-3}" \
+  --set time.end=0.25 --set "output.times=[0.025, 0.05, 0.1, 0.25]"
+"$POST" couette_check "$WORK/c-image/poiseuille_newtonian_image_walls.h5" --tolerance 0.01 >"$WORK/check.log" 2>&1 \
+  && pass || fail "image walls: Couette start-up: $(cat "$WORK/check.log")"
 cat "$WORK/check.log"
 
 # The rotating box, in one piece and split at t = 0.05 s by a resume.

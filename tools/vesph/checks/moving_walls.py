@@ -11,8 +11,8 @@ Usage
 
 couette_check: start-up of plane Couette flow (cases/couette_startup.toml). From the resolved
 scene: nu = fluid.viscosity / fluid.density; the moving wall is the wall block with a velocity,
-U its x component [m/s]; the fluid block spans y0 .. y0 + H (its min[1], max[1]), the other
-wall at rest. The fluid starts at rest and the upper wall at y0 + H moves at U from t = 0:
+U its x component [m/s]; the fluid block spans y0 .. y0 + H (its min[1], max[1]; with image
+walls their boundary rows, the floor's max[1] and the ceiling's min[1]), the other wall at rest. The fluid starts at rest and the upper wall at y0 + H moves at U from t = 0:
 
     u(y, t) = U s/H + (2U/pi) sum_{n>=1} ((-1)^n / n) sin(n pi s/H) exp(-n^2 pi^2 nu t / H^2),
     s = y - y0                                                 (vesph.analytic.couette_startup)
@@ -99,6 +99,15 @@ def couette(path, times=None, tolerance=0.01, out=sys.stdout, err=sys.stderr):
             fluid = _fluid_blocks(scene)
             y0 = min(float(b["min"][1]) for b in fluid)
             H = max(float(b["max"][1]) for b in fluid) - y0
+            # Image walls (as in the Poiseuille check): the surfaces are their boundary rows.
+            images = [b for b in scene.get("blocks", []) if b.get("kind") == "wall" and b.get("treatment") == "image"]
+            if images:
+                top = y0 + H
+                floors = [float(b["max"][1]) for b in images if float(b["normal"][1]) > 0]
+                ceilings = [float(b["min"][1]) for b in images if float(b["normal"][1]) < 0]
+                y0 = max(floors) if floors else y0
+                top = min(ceilings) if ceilings else top
+                H = top - y0
             moving = [b for b in scene.get("blocks", []) if b.get("kind") == "wall" and "velocity" in b]
             if len(moving) != 1:
                 raise ValueError("expected exactly one wall block with a velocity (the moving wall)")
