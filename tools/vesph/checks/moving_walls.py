@@ -17,7 +17,8 @@ walls their boundary rows, the floor's max[1] and the ceiling's min[1]), the oth
     u(y, t) = U s/H + (2U/pi) sum_{n>=1} ((-1)^n / n) sin(n pi s/H) exp(-n^2 pi^2 nu t / H^2),
     s = y - y0                                                 (vesph.analytic.couette_startup)
 
-(a lower moving wall: s -> H - s). For each checked frame: error = max over fluid particles of
+(a lower moving wall: s -> H - s); with the wall's ramp_time T the ramped start by Duhamel's
+principle (vesph.analytic.couette_startup). For each checked frame: error = max over fluid particles of
 |vx - u(y, t)| / |U| and the largest |vy| / |U|. Pass: error < tolerance (default 1 %) at every
 checked time, and the fluid mass unchanged.
 
@@ -112,6 +113,7 @@ def couette(path, times=None, tolerance=0.01, out=sys.stdout, err=sys.stderr):
             if len(moving) != 1:
                 raise ValueError("expected exactly one wall block with a velocity (the moving wall)")
             U = float(moving[0]["velocity"][0])
+            ramp = float(moving[0].get("ramp_time", 0.0))
             if U == 0:
                 raise ValueError("the moving wall's x velocity is 0")
             upper = float(moving[0]["min"][1]) >= y0 + H - 1e-12 * H
@@ -119,7 +121,8 @@ def couette(path, times=None, tolerance=0.01, out=sys.stdout, err=sys.stderr):
             print(f"FAIL: {path}: {e}", file=err)
             return 1
         m0 = _mass(h5.read(0, ("kind", "mass")))
-        print(f"file: {path}\nnu = {nu:.6g} m^2/s   H = {H:.6g} m   U = {U:.6g} m/s ({'upper' if upper else 'lower'} wall)"
+        print(f"file: {path}\nnu = {nu:.6g} m^2/s   H = {H:.6g} m   U = {U:.6g} m/s ({'upper' if upper else 'lower'} wall"
+              f"{f', ramped over {ramp:g} s' if ramp > 0 else ''})"
               f"   pass if error < {100 * tolerance:g} % of U", file=out)
         print(f"{'frame':>8} {'time [s]':>10} {'error [% U]':>12} {'max|vy| [% U]':>14} {'mass drift':>11}  status",
               file=out)
@@ -128,7 +131,7 @@ def couette(path, times=None, tolerance=0.01, out=sys.stdout, err=sys.stderr):
             g = h5.read(k, ("kind", "position", "velocity", "mass"))
             fl = g["kind"] == 0
             s = g["position"][fl, 1] - y0
-            u = couette_startup(s if upper else H - s, t, U, nu, H)
+            u = couette_startup(s if upper else H - s, t, U, nu, H, ramp)
             e = float(np.max(np.abs(g["velocity"][fl, 0] - u))) / abs(U)
             vy = float(np.max(np.abs(g["velocity"][fl, 1]))) / abs(U)
             drift = (_mass(g) - m0) / m0
