@@ -17,6 +17,7 @@ namespace {
 
 const char* kCouette = VESPH_SOURCE_DIR "/cases/couette_startup.toml";
 const char* kBox = VESPH_SOURCE_DIR "/cases/rotating_box.toml";
+const char* kBox3 = VESPH_SOURCE_DIR "/tests/scenes/rotating_box_3d.toml";
 
 template <int D>
 std::unique_ptr<Simulation<D>> build(Config& cfg, SceneHeader& h) {
@@ -225,6 +226,43 @@ TEST_CASE("moving walls: under arkode-imex the wall velocity is in b(x), J w doe
   CHECK(diff <= 1e-12 * scale);  // ... but not J w
 }
 
+TEST_CASE("moving walls: 3D, a rotation vector; the walls turned about it at t, the fluid at rest mirrored") {
+  SceneHeader h;
+  Config cfg = loadScene(kBox3, {}, h);
+  Simulation<3> sim(cfg, h);
+  SphSystem<3>& sys = sim.system();
+  ParticleSet<3>& P = sys.particles;
+  const std::size_t n = P.n_moving;
+  const std::vector<double> x0(P.position.begin() + 3 * n, P.position.end());
+  std::vector<double> y = sim.state(), ydot(y.size());
+  const double omega = 4.0, t = 0.15;
+  sys.evaluate(t, y.data(), ydot.data());
+  const double c = std::cos(omega * t), s = std::sin(omega * t);
+  double err_x = 0, err_v = 0;
+  for (std::size_t k = 0; k < P.nFixed(); ++k) {
+    const double px = x0[3 * k], py = x0[3 * k + 1], pz = x0[3 * k + 2];
+    const double ex = c * px - s * py, ey = s * px + c * py;
+    const std::size_t w = n + k;
+    err_x = std::max({err_x, std::abs(P.position[3 * w] - ex), std::abs(P.position[3 * w + 1] - ey),
+                      std::abs(P.position[3 * w + 2] - pz)});
+    err_v = std::max({err_v, std::abs(P.velocity[3 * w] + omega * ey), std::abs(P.velocity[3 * w + 1] - omega * ex),
+                      std::abs(P.velocity[3 * w + 2])});
+  }
+  CHECK(err_x < 1e-18);
+  CHECK(err_v < 1e-15);
+  // A wall particle touching the fluid at rest: its ghost velocity is u_w + omega x (x~_f - x_w)
+  // with a zero z component.
+  const Field* ghost = P.fields.find("wall_velocity");
+  REQUIRE(ghost != nullptr);
+  double gz = 0, gxy = 0;
+  for (std::size_t w = n; w < P.size(); ++w) {
+    gz = std::max(gz, std::abs(ghost->data[3 * (w - n) + 2]));
+    gxy = std::max(gxy, std::hypot(ghost->data[3 * (w - n)], ghost->data[3 * (w - n) + 1]));
+  }
+  CHECK(gz < 1e-18);
+  CHECK(gxy > 1e-3);  // the walls move (omega r ~ 3e-3 m/s)
+}
+
 TEST_CASE("moving walls: bad input is refused with the key, the units and the fix") {
   auto refuse = [](const char* scene, std::vector<std::string> over, const std::string& what) {
     SceneHeader h;
@@ -243,6 +281,18 @@ TEST_CASE("moving walls: bad input is refused with the key, the units and the fi
   refuse(kCouette, {"blocks[1].ramp_time=0.1"}, "blocks[1].ramp_time: expected no ramp_time on a wall at rest");
   refuse(kCouette, {"blocks[2].ramp_time=-0.1"}, "blocks[2].ramp_time: expected a non-negative number (s)");
   refuse(kBox, {"blocks[1].angular_velocity=[0.0, 0.0, 1.0]"}, "in 2D one number, the rotation about z");
+  {  // 3D: a vector
+    SceneHeader h;
+    try {
+      Config cfg = loadScene(kBox3, {"blocks[1].angular_velocity=4.0"}, h);
+      Simulation<3> sim(cfg, h);
+      FAIL("accepted a number as a 3D angular_velocity");
+    } catch (const InputError& e) {
+      CHECK_MESSAGE(std::string(e.what()).find("blocks[1].angular_velocity: expected an array of 3 numbers (rad/s; in 3D the vector omega)") !=
+                        std::string::npos,
+                    e.what());
+    }
+  }
   refuse(VESPH_SOURCE_DIR "/cases/poiseuille_newtonian_image_walls.toml",
          {"blocks[2].angular_velocity=1.0", "blocks[2].axis_point=[0.0, 0.0]"},
          "expected no rotation with treatment = \"image\"");
