@@ -14,6 +14,9 @@ void DummyWalls<D>::setup(Setup<D>& s) {
   model_ = s.pressure_model;
   if (model_) pressure_ = &s.particles.fields.require("pressure", 1);
   g_ = s.body_acceleration;
+  // Moving walls (set up before, vesph/boundary/moving_walls.hpp) give the walls' acceleration.
+  acceleration_ = s.particles.fields.find("wall_acceleration");
+  spin_ = s.particles.fields.find("wall_spin");
   rho0_ = s.rest_density;
   dx_ = s.spacing;
   const std::size_t n0 = s.particles.n_moving;
@@ -104,14 +107,34 @@ void DummyWalls<D>::update(const RhsContext<D>& ctx, const NeighbourList<D>& lis
     }
     double sumW = 0, sum_p = 0, sum_rho_gr = 0;
     Vec<D> sum_v = Vec<D>::Zero();
+    // g - a_w (Adami eq. 27) for a moving wall; g alone (a_w = 0) otherwise.
+    Vec<D> g_rel = g_;
+    if (acceleration_)
+      for (int a = 0; a < D; ++a) g_rel[a] -= acceleration_->data[D * (w - n0) + a];
     for (const Neighbour<D>& nb : fluid) {
       sumW += nb.W;
       sum_v += nb.W * p.v(nb.j);
       if (pres) sum_p += pres[nb.j] * nb.W;
-      if (!inflow) sum_rho_gr += p.density[nb.j] * g_.dot(nb.rij) * nb.W;  // rij = r_w - r_f
+      if (!inflow) sum_rho_gr += p.density[nb.j] * g_rel.dot(nb.rij) * nb.W;  // rij = r_w - r_f
     }
     if (sumW > 0) {
       for (int a = 0; a < D; ++a) out_v[a] = inflow ? p.velocity[D * w + a] : 2.0 * p.velocity[D * w + a] - sum_v[a] / sumW;
+      // A rotating wall: the mirror of the fluid's velocity relative to the rigid motion, whose
+      // Shepard average over the fluid is u_w + Omega x (x~_f - x_w) (theory.md §6.2).
+      if (spin_ && !inflow) {
+        Vec<D> centroid = Vec<D>::Zero();  // x~_f - x_w = -sum_f W rij / sum_f W
+        for (const Neighbour<D>& nb : fluid) centroid -= nb.W * nb.rij;
+        centroid /= sumW;
+        const double* om = spin_->data.data() + static_cast<std::size_t>(spin_->components) * (w - n0);
+        if constexpr (D == 2) {
+          out_v[0] += -om[0] * centroid[1];
+          out_v[1] += om[0] * centroid[0];
+        } else {
+          out_v[0] += om[1] * centroid[2] - om[2] * centroid[1];
+          out_v[1] += om[2] * centroid[0] - om[0] * centroid[2];
+          out_v[2] += om[0] * centroid[1] - om[1] * centroid[0];
+        }
+      }
       if (pres) {
         pres[w] = (sum_p + sum_rho_gr) / sumW;
         // A non-adhesive wall: a fluid in tension near it (a die's lip, where the extrudate's

@@ -4,9 +4,11 @@ namespace vesph {
 
 // One line per boundary: name, build function (defined in the boundary's own file), summary.
 // The order is the build order: the inflow buffer appends fixed particles that the walls then
-// cover (as dummy layers), and its hook runs before the domain exit's.
+// cover (as dummy layers), and its hook runs before the domain exit's. The moving walls come
+// before the dummy walls: their wall_acceleration field exists when the dummy walls set up.
 #define VESPH_BOUNDARIES(X)                                                                         \
   X(inflow_outflow, buildInflowOutflow, "[inflow]: a buffer of fixed particles (kind 3) feeding fluid through an inlet plane, velocity = \"prescribed\" or \"extrapolated\"; [outflow]: fluid particles past a plane are removed")   \
+  X(moving_walls, buildMovingWalls, "wall blocks with a prescribed rigid motion ([[blocks]] kind = \"wall\": velocity, angular_velocity, axis_point, ramp_time): positions and velocities set from t before every evaluation") \
   X(dummy_walls, buildDummyWalls, "wall particles ([[blocks]] kind = \"wall\"), no-slip: dummy layers (Adami et al. 2012), or with treatment = \"image\" boundary + image particles (Fang et al. 2006 eqs. 46-48)") \
   X(domain_exit, buildDomainExit, "removal of fluid particles that leave the domain (checks.leave_domain = \"remove\")")
 

@@ -27,6 +27,9 @@
 // correction brings the rows next to the buffer to its speed, plus the walls' hydrostatic term
 // across the flow, rho0 (g - (g.e) e) . r_wf; the flux along e through the buffer then leaves
 // the source divergence (docs/theory.md §10, the velocity inlet).
+// Moving walls (vesph/boundary/moving_walls.hpp): u_w is the wall particle's prescribed velocity
+// (in the source divergence and the no-penetration data), and the hydrostatic offset takes
+// rho0 (g - a_w), a_w the wall's acceleration (Adami eq. 27).
 // Solving for the increment of the carried pressure, the hydrostatic wall offsets of p^{n+1}
 // and p^n cancel and the walls enter the source at rest.
 #include <algorithm>
@@ -99,9 +102,14 @@ void WallConditions<D>::extrapolate(const StepContext<D>& sys, double dt, const 
   const Vec<D> rho_g_across = rho_g - rho_g.dot(e) * e;
   const double* v = P.velocity.data();
   const double rho0 = rho0_;
+  // Moving walls (vesph/boundary/moving_walls.hpp): rho0 (g - a_w) in the hydrostatic offset.
+  const Field* wall_acceleration = P.fields.find("wall_acceleration");
   sys.kernel.visit([&](auto shape) {
 #pragma omp parallel for schedule(static) if (N - n >= kParallelMinimum)
     for (std::size_t w = n; w < N; ++w) {
+      Vec<D> rho_g_w = rho_g;
+      if (wall_acceleration)
+        for (int a = 0; a < D; ++a) rho_g_w[a] -= rho0 * wall_acceleration->data[D * (w - n) + a];
       double sumW = 0, offset = 0, push = 0;  // offset: hydrostatic; push: no_penetration
       double inflow = 0;                      // the velocity inlet: the buffer's Neumann data
       const bool buffer = inlet && P.kind[w] == static_cast<std::uint8_t>(ParticleKind::inflow);
@@ -121,7 +129,7 @@ void WallConditions<D>::extrapolate(const StepContext<D>& sys, double dt, const 
               return;
             }
             if (!no_penetration) {
-              offset += rho_g.dot(rij) * W;  // rij = r_w - r_f
+              offset += rho_g_w.dot(rij) * W;  // rij = r_w - r_f
             } else {
               // The normal velocity of f relative to the wall beyond what closes its gap within
               // dt: delta < 0 is an approach the correction must stop, and the wall pressure

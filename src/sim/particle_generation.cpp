@@ -192,14 +192,18 @@ class LatticePlacer {
   LatticePlacer(const LatticeGeometry<D>& g, ParticleSet<D>& p, std::vector<WallPoint<D>>& wall_points)
       : g_(g), p_(p), wall_points_(wall_points), mass_(g.rest_density * std::pow(g.spacing, D)) {}
 
-  void place(const std::vector<Block<D>>& blocks, std::vector<HydrostaticBlock<D>>* hydrostatic) {
+  void place(const std::vector<Block<D>>& blocks, std::vector<HydrostaticBlock<D>>* hydrostatic,
+             std::vector<BlockParticles>* spans) {
+    if (spans) spans->assign(blocks.size(), BlockParticles{});
     for (ParticleKind pass : {ParticleKind::fluid, ParticleKind::wall})
-      for (const Block<D>& b : blocks) {
+      for (std::size_t k = 0; k < blocks.size(); ++k) {
+        const Block<D>& b = blocks[k];
         if (b.kind != pass) continue;
         const std::size_t first = p_.size();
         if (b.disk) placeRound(b);
         else placeBox(b, pass);
         if (b.hydrostatic && hydrostatic) hydrostatic->push_back({first, p_.size(), b.lo, b.hi, b.surface_height, b.path});
+        if (spans) (*spans)[k] = BlockParticles{first, p_.size() - first, pass == ParticleKind::wall, b.image};
       }
   }
 
@@ -304,7 +308,8 @@ class LatticePlacer {
 
 template <int D>
 std::vector<WallPoint<D>> generateParticles(ConfigTable& root, const LatticeGeometry<D>& geometry,
-                                            ParticleSet<D>& particles, std::vector<HydrostaticBlock<D>>* hydrostatic) {
+                                            ParticleSet<D>& particles, std::vector<HydrostaticBlock<D>>* hydrostatic,
+                                            std::vector<BlockParticles>* spans) {
   const Vec<D> v0 = root.table("initial").vector<D>("velocity", Vec<D>::Zero(), "m/s");
   auto tables = root.tableArray("blocks");
   if (tables.empty()) root.fail("blocks", "at least one [[blocks]] table with kind, min and max");
@@ -318,7 +323,7 @@ std::vector<WallPoint<D>> generateParticles(ConfigTable& root, const LatticeGeom
   if (!hydrostatic)
     for (const Block<D>& b : blocks)
       if (b.hydrostatic) throw InputError(geometry.file + ": " + b.path + ".hydrostatic: not available here");
-  LatticePlacer<D>(geometry, particles, wall_points).place(blocks, hydrostatic);
+  LatticePlacer<D>(geometry, particles, wall_points).place(blocks, hydrostatic, spans);
   if (particles.n_moving == 0) root.fail("blocks", "at least one block of kind \"fluid\"");
   // Scenes without image walls or pressure floors keep no per-wall-particle record
   // (DummyWalls treats an empty one as all dummy layers without a floor).
@@ -377,9 +382,9 @@ void applyHydrostaticDensity(const std::vector<HydrostaticBlock<D>>& blocks, con
 }
 
 template std::vector<WallPoint<2>> generateParticles<2>(ConfigTable&, const LatticeGeometry<2>&, ParticleSet<2>&,
-                                                        std::vector<HydrostaticBlock<2>>*);
+                                                        std::vector<HydrostaticBlock<2>>*, std::vector<BlockParticles>*);
 template std::vector<WallPoint<3>> generateParticles<3>(ConfigTable&, const LatticeGeometry<3>&, ParticleSet<3>&,
-                                                        std::vector<HydrostaticBlock<3>>*);
+                                                        std::vector<HydrostaticBlock<3>>*, std::vector<BlockParticles>*);
 template void applyHydrostaticDensity<2>(const std::vector<HydrostaticBlock<2>>&, const PressureModel*, const Vec<2>&,
                                          double, const std::string&, ParticleSet<2>&);
 template void applyHydrostaticDensity<3>(const std::vector<HydrostaticBlock<3>>&, const PressureModel*, const Vec<3>&,

@@ -63,11 +63,12 @@ Simulation<D>::Simulation(Config& config, const SceneHeader& header) : config_(c
   root.markRead("dimension");
   readDomainKernelFluid(root);
   std::vector<HydrostaticBlock<D>> hydrostatic_blocks;
+  std::vector<BlockParticles> block_spans;
   wall_points_ = generateParticles(root, LatticeGeometry<D>{config.file(), dx_, rho0_, system_.domain, system_.kernel},
-                                   system_.particles, &hydrostatic_blocks);
+                                   system_.particles, &hydrostatic_blocks, &block_spans);
   // Walls, open boundaries (an inflow buffer of fixed particles, an outflow plane), domain exit.
   BoundaryBuild<D> boundaries{root, system_.particles, system_.domain, dx_, rho0_, system_.kernel.supportRadius(),
-                              wall_points_, {}, {}, {}};
+                              wall_points_, block_spans, {}, {}, {}};
   buildBoundaries(boundaries);
   buildEffects(root);
   system_.boundaries = std::move(boundaries.boundaries);

@@ -37,7 +37,11 @@ void SphSystem<D>::setup(double spacing, double rest_density, double viscosity, 
   for (auto& e : effects) all.push_back(e.get());
   Setup<D> s{particles, kernel, spacing, rest_density, viscosity, body_acceleration_, pressure_model_, &evolving_, &all};
   for (auto& hk : hooks) hk->setup(s);
-  for (auto& b : boundaries) b->setup(s);
+  moving_boundaries_.clear();
+  for (auto& b : boundaries) {
+    b->setup(s);
+    if (b->movesFixed()) moving_boundaries_.push_back(b.get());
+  }
   for (auto& e : effects) e->setup(s);
   particles.resizeFields();
   for (Field* f : evolving_)
@@ -71,8 +75,9 @@ void SphSystem<D>::setup(double spacing, double rest_density, double viscosity, 
   next_id_ = 0;
   for (std::uint64_t ident : particles.id) next_id_ = std::max(next_id_, ident + 1);
   neighbours.configure(domain, kernel.supportRadius(), skin);
-  // Inflow buffers move fixed particles: the list then watches their displacement as well.
-  neighbours.trackFixed(mayResize());
+  // Inflow buffers and moving walls move fixed particles: the list then watches their
+  // displacement as well.
+  neighbours.trackFixed(mayResize() || movesFixed());
   neighbours.update(particles, true);
   driver.prepare(neighbours);
 }
@@ -184,6 +189,7 @@ void SphSystem<D>::rhsPart(RhsPart part, double t, const double* y, double* ydot
 template <int D>
 void SphSystem<D>::evaluateWith(const PhaseLists& lists, RhsPart part, double t, const double* y, double* ydot) {
   unpack(y);
+  placeFixed(t);  // moving walls at time t (before the list sees the positions)
   if (neighbours.update(particles)) driver.prepare(neighbours);
 
   const std::size_t n = particles.n_moving;
@@ -267,12 +273,14 @@ StepContext<D>& SphSystem<D>::stepContext() {
 
 template <int D>
 void SphSystem<D>::startHooks(double t, double* y) {
+  placeFixed(t);
   StepContext<D>& context = stepContext();
   for (auto& hk : hooks) hk->start(context, t, y);
 }
 
 template <int D>
 bool SphSystem<D>::afterStep(double t, double dt, double* y) {
+  placeFixed(t);  // the hooks (the ISPH projection) see the moving walls at the step's time
   StepContext<D>& context = stepContext();
   for (auto& hk : hooks) hk->apply(context, t, dt, y);
   const std::size_t n = particles.n_moving;

@@ -1,5 +1,6 @@
 """Analytic solutions (vesph.analytic): Poiseuille start-up (t = 0, walls, steady and short-time
-limits, the PDE) and the XPP homogeneous-shear solver (small-rate limit = Oldroyd-B, Newton
+limits, the PDE), plane Couette start-up (walls, steady limit, the PDE, the ramp against Duhamel's
+integral) and the XPP homogeneous-shear solver (small-rate limit = Oldroyd-B, Newton
 and ODE routes agree, flow-curve inversion, channel velocity, the 1-D start-up)."""
 
 import numpy as np
@@ -48,6 +49,53 @@ def make_analytic_tests(tmp):
                    + analytic_velocity(y - dy, tt, F, NU, H)) / dy ** 2
             res = np.max(np.abs(dvdt - NU * d2v - F)) / F
             expect(res < 1e-4, f"PDE residual {res:.2e} at t={tt}")
+    return T
+
+
+def make_couette_tests(tmp):
+    """Plane Couette start-up (moving walls): walls, steady limit, the PDE, the ramp against a
+    numerical Duhamel integral of the impulsive series."""
+    T = Checks()
+    t = T.add
+    from scipy.integrate import quad
+
+    from vesph.analytic import couette_startup
+    U = 1e-3
+
+    @t
+    def couette_walls_and_limits():
+        for ramp in (0.0, 0.05):
+            for tt in (1e-3, 0.03, 0.3):
+                f = 1.0 if ramp == 0 or tt >= ramp else 0.5 * (1 - np.cos(np.pi * tt / ramp))
+                w = couette_startup(np.array([0.0, H]), tt, U, NU, H, ramp)
+                expect(abs(w[0]) < 1e-12 * U and abs(w[1] - f * U) < 1e-9 * U, f"walls {w} at t={tt}, ramp {ramp}")
+            y = np.linspace(0, H, 11)
+            steady = couette_startup(y, 20.0, U, NU, H, ramp)
+            expect(np.max(np.abs(steady - U * y / H)) < 1e-12 * U, "steady limit")
+        expect(isinstance(couette_startup(0.3e-3, 0.05, U, NU, H), float), "scalar gives a float")
+
+    @t
+    def couette_satisfies_pde():
+        y = np.linspace(0.05e-3, 0.95e-3, 19)
+        for ramp in (0.0, 0.05):
+            for tt in (0.01, 0.03, 0.1):
+                dt, dy = 1e-5, 2e-6
+                u = lambda yy, s: couette_startup(yy, s, U, NU, H, ramp)
+                dudt = (u(y, tt + dt) - u(y, tt - dt)) / (2 * dt)
+                d2u = (u(y + dy, tt) - 2 * u(y, tt) + u(y - dy, tt)) / dy ** 2
+                res = np.max(np.abs(dudt - NU * d2u)) / (U / 0.05)
+                expect(res < 1e-4, f"PDE residual {res:.2e} at t={tt}, ramp {ramp}")
+
+    @t
+    def couette_ramp_is_duhamel():
+        ramp = 0.05
+        s = np.array([0.1e-3, 0.5e-3, 0.99e-3])
+        fp = lambda r: 0.5 * np.pi / ramp * np.sin(np.pi * r / ramp) if r < ramp else 0.0
+        for tt in (0.01, 0.05, 0.1):
+            a = couette_startup(s, tt, U, NU, H, ramp)
+            b = [quad(lambda r: fp(r) * couette_startup(si, tt - r, U, NU, H) if tt - r > 0 else 0.0,
+                      0, min(tt, ramp), limit=200)[0] for si in s]
+            expect(np.max(np.abs(a - np.array(b))) < 1e-7 * U, f"ramp {a} vs Duhamel {b} at t={tt}")
     return T
 
 
@@ -113,4 +161,4 @@ def make_xpp_solver_tests(tmp):
 
 
 # unittest collects the groups above through load_tests
-load_tests = load_tests_of(make_analytic_tests, make_xpp_solver_tests)
+load_tests = load_tests_of(make_analytic_tests, make_couette_tests, make_xpp_solver_tests)

@@ -29,6 +29,8 @@ TOOL_MODULES = {
     "startup_channel_check": "vesph.checks.startup_channel",
     "second_order_channel_check": "vesph.checks.second_order_channel",
     "xpp_steady_shear": "vesph.checks.xpp_shear",
+    "couette_check": "vesph.checks.couette",
+    "rotation_check": "vesph.checks.rotating_box",
     "hydrostatic_check": "vesph.measure.hydrostatic",
     "inflow_check": "vesph.measure.inflow",
     "drop_measure": "vesph.measure.drop",

@@ -2,6 +2,7 @@
 docs/validation.md), in SI units:
 
 * analytic_velocity: transient plane Poiseuille flow from rest (Newtonian, series solution);
+* couette_startup: start-up of plane Couette flow, one wall set moving (Newtonian, series);
 * waters_king: Waters & King's start-up of Oldroyd-B channel flow (dimensionless);
 * coefficients, steady_stresses, startup_velocity: the second-order fluid in channel flow;
 * Xpp, steady_shear, steady_shear_ode, channel_reference, startup_1d: the extended Pom-Pom
@@ -68,6 +69,60 @@ def analytic_velocity(y, t, F, nu, H, y0=0.0):
         if n0 > 10_000_000:   # only reachable for absurdly small t
             break
     out = steady - total
+    return float(out[0]) if scalar else out
+
+
+# --------------------------------------------------------------- plane Couette start-up
+def couette_startup(s, t, U, nu, H, ramp_time=0.0):
+    """Start-up of plane Couette flow [m/s]: fluid at rest between a wall at rest (s = 0) and a
+    wall set moving along the channel at t = 0 (s = H), at speed U f(t):
+
+        f = 1 (ramp_time = 0): the impulsive start,
+        u(s, t) = U s/H + (2U/pi) sum_{n>=1} ((-1)^n / n) sin(n pi s/H) exp(-lambda_n t),
+        lambda_n = n^2 pi^2 nu / H^2;
+
+        f = (1 - cos(pi t/T))/2 up to T = ramp_time, 1 after (vesph's ramp): by Duhamel's
+        principle u = int_0^t f'(r) u_impulsive(s, t - r) dr, in closed form per mode
+        u(s, t) = U f(t) s/H + (2U/pi) sum_n ((-1)^n / n) sin(n pi s/H) I_n(t),
+        I_n = (w/2) [e^{-lambda_n (t - tau)} (lambda_n sin(w tau) - w cos(w tau)) + w e^{-lambda_n t}]
+              / (lambda_n^2 + w^2),   w = pi/T, tau = min(t, T).
+
+    s: distance(s) from the wall at rest [m]; t >= 0 [s]; nu [m^2/s]; H [m]. The series is
+    summed until its terms are below 1e-16 of U (the ramp's, which fall like 1/n^3, 1e-12; at
+    least 64 terms), in blocks of 4096 terms; at t = 0 the initial state (0 for s < H) is
+    returned. Float for scalar s, else an array shaped like s.
+    """
+    if t < 0 or nu <= 0 or H <= 0 or ramp_time < 0:
+        raise ValueError("couette_startup: t >= 0, nu > 0, H > 0 and ramp_time >= 0")
+    s = np.asarray(s, dtype=np.float64)
+    scalar = s.ndim == 0
+    s = np.atleast_1d(s)
+    if t == 0.0:
+        out = np.where(s >= H, U if ramp_time == 0 else 0.0, 0.0)
+        return float(out[0]) if scalar else out
+    decay = math.pi ** 2 * nu * t / (H * H)
+    nmax = 64
+    if ramp_time == 0:
+        while math.exp(-nmax * nmax * decay) / nmax >= 1e-16 and nmax < 1_000_000:
+            nmax *= 2
+    else:  # I_n falls like w / lambda_n: terms ~ 2 w H^2 / (nu pi^3 n^3) of U; to 1e-12 of U
+        while 2.0 * (math.pi / ramp_time) * H * H / (nu * math.pi ** 3 * nmax ** 3) >= 1e-12 and nmax < 1_000_000:
+            nmax *= 2
+    w = math.pi / ramp_time if ramp_time > 0 else 0.0
+    tau = min(t, ramp_time)
+    factor = 1.0 if ramp_time == 0 else 0.5 * (1.0 - math.cos(w * tau))
+    out = U * factor * s / H
+    chunk = 4096  # terms per block (memory: len(s) x chunk)
+    for n0 in range(1, nmax + 1, chunk):
+        n = np.arange(n0, min(n0 + chunk, nmax + 1), dtype=np.float64)
+        lam = n * n * math.pi ** 2 * nu / (H * H)
+        if ramp_time == 0:
+            weight = np.exp(-lam * t)
+        else:
+            weight = 0.5 * w * (np.exp(-lam * (t - tau)) * (lam * math.sin(w * tau) - w * math.cos(w * tau))
+                                + w * np.exp(-lam * t)) / (lam * lam + w * w)
+        coef = (2.0 * U / math.pi) * (-1.0) ** n / n * weight
+        out = out + np.sin(np.outer(s, n) * (math.pi / H)) @ coef
     return float(out[0]) if scalar else out
 
 

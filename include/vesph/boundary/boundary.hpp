@@ -14,6 +14,12 @@ class Boundary {
   virtual ~Boundary() = default;
   virtual std::string_view name() const = 0;
   virtual void setup(Setup<D>& s) = 0;
+  // A boundary that moves fixed particles (moving walls): place sets their positions and
+  // velocities at time t; the system calls it before every right-hand-side evaluation (before
+  // the neighbour list's update) and before the between-step hooks, and the neighbour list
+  // then watches the fixed particles' displacement as well.
+  virtual bool movesFixed() const { return false; }
+  virtual void place(double t, ParticleSet<D>& particles) {}
   virtual void update(const RhsContext<D>& ctx, const NeighbourList<D>& list, PairDriver<D>& driver) = 0;
   // The moving set changed between steps: fixed particles moved to new indices (ParticleRemap).
   virtual void resized(const ParticleRemap& remap) {}

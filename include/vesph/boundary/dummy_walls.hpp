@@ -6,7 +6,9 @@
 //   wall_velocity_w = 2 u_w - sum_f v_f W_wf / sum_f W_wf        (no slip on the surface)
 //   p_w = [ sum_f p_f W_wf + (g - a_w) . sum_f rho_f r_wf W_wf ] / sum_f W_wf
 //   rho_w from the inverse equation of state at p_w
-// u_w = 0 (walls at rest), a_w = 0, g the scene's body acceleration. A wall particle with no
+// u_w the wall particle's own velocity (0 for walls at rest; a moving wall's prescribed velocity,
+// vesph/boundary/moving_walls.hpp), a_w its acceleration (field wall_acceleration of the moving
+// walls; 0 without), g the scene's body acceleration. A wall particle with no
 // fluid neighbour keeps p0, rho0 and zero velocity. The wall's own velocity (zero) enters the
 // continuity equation; the extrapolated velocity enters the viscous term only.
 // Fields flagged Field::extrapolated_to_walls (elastic and extra stresses) get the normalised
@@ -73,6 +75,8 @@ class DummyWalls final : public Boundary<D> {
 
  private:
   Field* wall_velocity_ = nullptr;
+  const Field* acceleration_ = nullptr;  // wall_acceleration (moving walls), or none
+  const Field* spin_ = nullptr;          // wall_spin (rotating walls), or none
   std::vector<Field*> interpolated_;
   bool interpolated_ready_ = false;
   Field* pressure_ = nullptr;

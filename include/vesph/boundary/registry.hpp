@@ -22,12 +22,20 @@ struct BoundaryFacts {
   bool open = false;                  // [inflow] or [outflow]
   bool inflow_buffer = false;         // an inflow buffer of fixed particles
   bool extrapolated_inflow = false;   // inflow.velocity = "extrapolated" (a pressure inlet)
-  double prescribed_peak_speed = 0;   // m/s, of a prescribed inflow (0: none)
+  double prescribed_peak_speed = 0;   // m/s, of a prescribed inflow or moving wall (0: none)
   bool removes_leaving = false;       // checks.leave_domain = "remove"
   // The inflow buffer's flow direction e = inflow_sign e_axis (the ISPH velocity inlet's
   // direction); inflow_axis < 0 without a buffer.
   int inflow_axis = -1;
   double inflow_sign = 1;
+};
+
+// The particles of one [[blocks]] table (scene order): [first, first + count) in the particle
+// set as built by the blocks (sim/particle_generation), its kind and wall treatment.
+struct BlockParticles {
+  std::size_t first = 0, count = 0;
+  bool wall = false;
+  bool image = false;
 };
 
 template <int D>
@@ -40,6 +48,7 @@ struct BoundaryBuild {
   const Domain<D>& domain;
   double spacing = 0, rest_density = 0, support = 0;
   std::vector<WallPoint<D>>& wall_points;
+  const std::vector<BlockParticles>& blocks;  // per [[blocks]] table, in scene order
   // What they add, in registry order: boundaries for the right-hand side, hooks to run after the
   // pressure scheme's hooks, and the facts.
   std::vector<std::unique_ptr<Boundary<D>>> boundaries;

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "vesph/boundary/dummy_walls.hpp"
+#include "vesph/boundary/registry.hpp"
 #include "vesph/core/domain.hpp"
 #include "vesph/core/kernel.hpp"
 #include "vesph/core/neighbours.hpp"
@@ -38,11 +39,13 @@ struct HydrostaticBlock {
 // Reads [[blocks]] (and [initial] velocity) and adds their particles to `particles` (ids from
 // 0). Returns per wall particle its treatment (image walls, pressure floors), or an empty list
 // when every wall is plain dummy layers. The fluid blocks marked hydrostatic go to
-// `hydrostatic` when given (otherwise the key is refused).
+// `hydrostatic` when given (otherwise the key is refused). `spans`, when given, receives per
+// [[blocks]] table (scene order) its particles (the moving walls' blocks).
 template <int D>
 std::vector<WallPoint<D>> generateParticles(ConfigTable& root, const LatticeGeometry<D>& geometry,
                                             ParticleSet<D>& particles,
-                                            std::vector<HydrostaticBlock<D>>* hydrostatic = nullptr);
+                                            std::vector<HydrostaticBlock<D>>* hydrostatic = nullptr,
+                                            std::vector<BlockParticles>* spans = nullptr);
 
 // The hydrostatic initial density (docs/theory.md "Hydrostatic initial density"): each particle
 // of the blocks gets the density whose pressure is the hydrostatic one under the body

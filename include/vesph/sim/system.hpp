@@ -98,6 +98,8 @@ class SphSystem final : public OdeSystem, public StateEvaluator {
 
   void pack(double* y) const;
   void unpack(const double* y) override;
+  // Whether a boundary moves fixed particles (moving walls).
+  bool movesFixed() const { return !moving_boundaries_.empty(); }
 
   const PressureModel* pressureModel() const { return pressure_model_; }
   const std::vector<Field*>& evolvingFields() const { return evolving_; }
@@ -115,7 +117,13 @@ class SphSystem final : public OdeSystem, public StateEvaluator {
   void particlePass(const std::vector<Effect<D>*>& list, const RhsContext<D>& ctx);
   // remap_ applied to the particle set, effects, boundaries, hooks and the neighbour structures.
   void applyRemap();
+  // The boundaries that move fixed particles (Boundary::movesFixed): placed at the time of
+  // every evaluation and of every accepted step.
+  void placeFixed(double t) {
+    for (Boundary<D>* b : moving_boundaries_) b->place(t, particles);
+  }
 
+  std::vector<Boundary<D>*> moving_boundaries_;
   PhaseLists full_, explicit_, implicit_;
   std::vector<Field*> evolving_;
   std::vector<double*> field_rates_;
