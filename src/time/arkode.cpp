@@ -74,6 +74,17 @@ ErrorTolerances readTolerances(ConfigTable& cfg, const ReferenceScales& s) {
   return {rtol, {atol_x, atol_rho, atol_v, atol_s}};
 }
 
+std::string arkodeFlagName(int flag) {
+  char* name = ERKStepGetReturnFlagName(flag);  // ARKStepGetReturnFlagName gives the same names
+  std::string s = name ? name : std::to_string(flag);
+  std::free(name);
+  return s;
+}
+
+void checkArkode(int flag, const char* what) {
+  if (flag != ARK_SUCCESS) throw std::runtime_error(std::string("ARKODE ") + what + ": " + arkodeFlagName(flag));
+}
+
 const std::vector<ButcherTableInfo>& erkTables() {
   static const std::vector<ButcherTableInfo> tables = [] {
     // In the order of ARKODE_ERKTableID (arkode/arkode_butcher_erk.h, SUNDIALS 6.4.1).
@@ -100,14 +111,6 @@ const std::vector<ButcherTableInfo>& erkTables() {
 
 namespace {
 
-std::string flagName(int flag) {
-  char* name = ERKStepGetReturnFlagName(flag);
-  std::string s = name ? name : std::to_string(flag);
-  std::free(name);
-  return s;
-}
-
-constexpr double kCflFraction = 0.5;
 
 class ArkodeErk final : public Integrator {
  public:
@@ -130,33 +133,31 @@ class ArkodeErk final : public Integrator {
   void start(OdeSystem& system, double t0, double* y) override {
     sys_ = &system;
     t_ = t0;
-    t_last_accepted_ = t0;
+    callbacks_ = ArkodeCallbackState{.sys = &system, .t_last_accepted = t0};
     y_ = wrap(y);
     resizable_ = system.mayResize();
     mem_ = ERKStepCreate(&ArkodeErk::rhs, t0, y_, sunctx_);
     if (!mem_) throw std::runtime_error("ERKStepCreate failed");
-    check(ERKStepSetUserData(mem_, this), "SetUserData");
-    check(ERKStepSetTableNum(mem_, static_cast<ARKODE_ERKTableID>(table_.id)), "SetTableNum");
-    check(ERKStepSetMaxNumSteps(mem_, 1000000000L), "SetMaxNumSteps");
-    check(ERKStepSetPostprocessStepFn(mem_, &ArkodeErk::postStep), "SetPostprocessStepFn");
-    if (std::isfinite(control_.max_step)) check(ERKStepSetMaxStep(mem_, control_.max_step), "SetMaxStep");
+    checkArkode(ERKStepSetUserData(mem_, this), "SetUserData");
+    checkArkode(ERKStepSetTableNum(mem_, static_cast<ARKODE_ERKTableID>(table_.id)), "SetTableNum");
+    checkArkode(ERKStepSetMaxNumSteps(mem_, 1000000000L), "SetMaxNumSteps");
+    checkArkode(ERKStepSetPostprocessStepFn(mem_, &ArkodeErk::postStep), "SetPostprocessStepFn");
+    if (std::isfinite(control_.max_step)) checkArkode(ERKStepSetMaxStep(mem_, control_.max_step), "SetMaxStep");
     if (adaptive_) {
       setTolerances();
-      check(ERKStepSetStabilityFn(mem_, &ArkodeErk::stability, this), "SetStabilityFn");
-      // ARKODE multiplies the stability function's step by the CFL fraction, which must be
-      // below 1; our limits already carry their coefficients, so the function returns the
-      // limit divided by this fraction.
-      check(ERKStepSetCFLFraction(mem_, kCflFraction), "SetCFLFraction");
+      checkArkode(ERKStepSetStabilityFn(mem_, &ArkodeErk::stability, this), "SetStabilityFn");
+      // The limits carry their coefficients already (arkodeStabilityStep, sundials_support.hpp).
+      checkArkode(ERKStepSetCFLFraction(mem_, kArkodeCflFraction), "SetCFLFraction");
       // ARKODE keeps the step unchanged while the proposed one is within [1, 1.5] times it;
       // that window froze steps below the stability limit after the start-up ramp (up to 28 %
       // more steps, docs/studies.md). Let every proposal through.
-      check(ERKStepSetFixedStepBounds(mem_, 1.0, 1.0), "SetFixedStepBounds");
-      if (initial_step_ > 0) check(ERKStepSetInitStep(mem_, initial_step_), "SetInitStep");
+      checkArkode(ERKStepSetFixedStepBounds(mem_, 1.0, 1.0), "SetFixedStepBounds");
+      if (initial_step_ > 0) checkArkode(ERKStepSetInitStep(mem_, initial_step_), "SetInitStep");
     }
   }
 
   bool advance(double tout) override {
-    check(ERKStepSetStopTime(mem_, tout), "SetStopTime");
+    checkArkode(ERKStepSetStopTime(mem_, tout), "SetStopTime");
     // A state whose length may change is advanced one step at a time, so that the particle
     // changes happen between steps, outside ERKStepEvolve.
     const int mode = adaptive_ && !resizable_ ? ARK_NORMAL : ARK_ONE_STEP;
@@ -165,16 +166,16 @@ class ArkodeErk final : public Integrator {
         double h = control_.fixed_step > 0 ? control_.fixed_step : limit();
         if (!std::isfinite(h))
           throw InputError("integrator: no stability limit bounds the time step; set integrator.max_step or integrator.step (s)");
-        check(ERKStepSetFixedStep(mem_, h), "SetFixedStep");
+        checkArkode(ERKStepSetFixedStep(mem_, h), "SetFixedStep");
       }
       double t = t_;
       const int flag = ERKStepEvolve(mem_, tout, y_, &t, mode);
       t_ = t;
-      if (stop_requested_) return false;
-      if (!pending_error_.empty()) throw NumericalFailure(pending_error_);
+      if (callbacks_.stop_requested) return false;
+      if (!callbacks_.pending_error.empty()) throw NumericalFailure(callbacks_.pending_error);
       if (flag < 0) {
         std::ostringstream os;
-        os << "ARKODE " << name() << " (" << table_.name << ") failed at t = " << t_ << " s: " << flagName(flag);
+        os << "ARKODE " << name() << " (" << table_.name << ") failed at t = " << t_ << " s: " << arkodeFlagName(flag);
         if (flag == ARK_ERR_FAILURE || flag == ARK_TOO_CLOSE)
           os << " (the error test failed repeatedly or the step became too small: the solution is blowing up or the tolerances are too tight)";
         throw NumericalFailure(os.str());
@@ -218,7 +219,7 @@ class ArkodeErk final : public Integrator {
     if (atol_) N_VDestroy(atol_);
     atol_ = N_VClone(y_);
     fillTolerances(N_VGetArrayPointer(atol_), sys_->size(), sys_->segments(), atol_segments_);
-    check(ERKStepSVtolerances(mem_, rtol_, atol_), "SVtolerances");
+    checkArkode(ERKStepSVtolerances(mem_, rtol_, atol_), "SVtolerances");
   }
 
   // The particle set changed after the step just accepted: the system rewrites the state,
@@ -228,51 +229,26 @@ class ArkodeErk final : public Integrator {
   void resize(double tout) {
     double* y = sys_->resizeState(t_, N_VGetArrayPointer(y_));
     N_Vector fresh = wrap(y);
-    check(ERKStepResize(mem_, fresh, 1.0, t_, nullptr, nullptr), "Resize");
+    checkArkode(ERKStepResize(mem_, fresh, 1.0, t_, nullptr, nullptr), "Resize");
     N_VDestroy(y_);
     y_ = fresh;
     if (adaptive_) setTolerances();
-    check(ERKStepSetStopTime(mem_, tout), "SetStopTime");
-  }
-
-  static void check(int flag, const char* what) {
-    if (flag != ARK_SUCCESS) throw std::runtime_error(std::string("ARKODE ") + what + ": " + flagName(flag));
+    checkArkode(ERKStepSetStopTime(mem_, tout), "SetStopTime");
   }
 
   // A right-hand side must not throw through C code: failures are kept and reported after
   // ERKStepEvolve returns (a negative return is unrecoverable for ERKStep).
   static int rhs(realtype t, N_Vector y, N_Vector ydot, void* data) {
     auto* self = static_cast<ArkodeErk*>(data);
-    try {
-      self->sys_->rhs(t, N_VGetArrayPointer(y), N_VGetArrayPointer(ydot));
-      return 0;
-    } catch (const std::exception& e) {
-      self->pending_error_ = e.what();
-      return -1;
-    }
+    return self->callbacks_.guarded([&] { self->sys_->rhs(t, N_VGetArrayPointer(y), N_VGetArrayPointer(ydot)); });
   }
 
   static int postStep(realtype t, N_Vector y, void* data) {
-    auto* self = static_cast<ArkodeErk*>(data);
-    // Inside the post-process function ERKStepGetLastStep still reports the step before this
-    // one: the step just taken is the time advanced since the last call.
-    const double h = t - self->t_last_accepted_;
-    self->t_last_accepted_ = t;
-    try {
-      if (!self->sys_->afterStep(t, h, N_VGetArrayPointer(y))) {
-        self->stop_requested_ = true;
-        return -1;
-      }
-    } catch (const std::exception& e) {
-      self->pending_error_ = e.what();
-      return -1;
-    }
-    return 0;
+    return static_cast<ArkodeErk*>(data)->callbacks_.afterStep(t, N_VGetArrayPointer(y));
   }
 
   static int stability(N_Vector, realtype, realtype* hstab, void* data) {
-    const double h = static_cast<ArkodeErk*>(data)->limit();
-    *hstab = std::isfinite(h) ? h / kCflFraction : -1.0;  // a non-positive value means "no limit"
+    *hstab = arkodeStabilityStep(static_cast<ArkodeErk*>(data)->limit());
     return 0;
   }
 
@@ -286,10 +262,9 @@ class ArkodeErk final : public Integrator {
   void* mem_ = nullptr;
   N_Vector y_ = nullptr, atol_ = nullptr;
   OdeSystem* sys_ = nullptr;
-  double t_ = 0, t_last_accepted_ = 0;
-  bool stop_requested_ = false;
+  double t_ = 0;
   bool resizable_ = false;
-  std::string pending_error_;
+  ArkodeCallbackState callbacks_;
 };
 
 const ButcherTableInfo& tableFromConfig(ConfigTable& cfg, bool adaptive) {

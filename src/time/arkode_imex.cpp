@@ -32,7 +32,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdlib>
 #include <sstream>
 
 #include "sundials_support.hpp"
@@ -67,14 +66,6 @@ const std::vector<ArkPairInfo>& arkPairs() {
 
 namespace {
 
-std::string flagName(int flag) {
-  char* name = ARKStepGetReturnFlagName(flag);
-  std::string s = name ? name : std::to_string(flag);
-  std::free(name);
-  return s;
-}
-
-constexpr double kCflFraction = 0.5;
 // Krylov subspace of GMRES (no restarts): with the diagonal preconditioner the viscous operator
 // at 20-100x the explicit limit converges in a few iterations.
 constexpr int kKrylovDimension = 20;
@@ -100,49 +91,49 @@ class ArkodeImex final : public Integrator {
   void start(OdeSystem& system, double t0, double* y) override {
     sys_ = &system;
     t_ = t0;
-    t_last_accepted_ = t0;
+    callbacks_ = ArkodeCallbackState{.sys = &system, .t_last_accepted = t0};
     y_ = wrapState(y, sys_->size(), sunctx_);
     resizable_ = system.mayResize();
     mem_ = ARKStepCreate(&ArkodeImex::explicitRhs, &ArkodeImex::implicitRhs, t0, y_, sunctx_);
     if (!mem_) throw std::runtime_error("ARKStepCreate failed");
-    check(ARKStepSetUserData(mem_, this), "SetUserData");
-    check(ARKStepSetTableName(mem_, ("ARKODE_" + pair_.implicit_table).c_str(), ("ARKODE_" + pair_.explicit_table).c_str()),
+    checkArkode(ARKStepSetUserData(mem_, this), "SetUserData");
+    checkArkode(ARKStepSetTableName(mem_, ("ARKODE_" + pair_.implicit_table).c_str(), ("ARKODE_" + pair_.explicit_table).c_str()),
           "SetTableName");
-    check(ARKStepSetMaxNumSteps(mem_, 1000000000L), "SetMaxNumSteps");
-    check(ARKStepSetPostprocessStepFn(mem_, &ArkodeImex::postStep), "SetPostprocessStepFn");
-    if (std::isfinite(control_.max_step)) check(ARKStepSetMaxStep(mem_, control_.max_step), "SetMaxStep");
+    checkArkode(ARKStepSetMaxNumSteps(mem_, 1000000000L), "SetMaxNumSteps");
+    checkArkode(ARKStepSetPostprocessStepFn(mem_, &ArkodeImex::postStep), "SetPostprocessStepFn");
+    if (std::isfinite(control_.max_step)) checkArkode(ARKStepSetMaxStep(mem_, control_.max_step), "SetMaxStep");
     // The tolerances set the error control (adaptive) and the Newton and Krylov stopping
     // tests (both modes).
     setTolerances();
     attachLinearSolver();
     if (adaptive_) {
-      check(ARKStepSetStabilityFn(mem_, &ArkodeImex::stability, this), "SetStabilityFn");
+      checkArkode(ARKStepSetStabilityFn(mem_, &ArkodeImex::stability, this), "SetStabilityFn");
       // As for ERKStep (src/time/arkode.cpp): the limits carry their coefficients already,
       // and every proposed step goes through.
-      check(ARKStepSetCFLFraction(mem_, kCflFraction), "SetCFLFraction");
-      check(ARKStepSetFixedStepBounds(mem_, 1.0, 1.0), "SetFixedStepBounds");
-      if (initial_step_ > 0) check(ARKStepSetInitStep(mem_, initial_step_), "SetInitStep");
+      checkArkode(ARKStepSetCFLFraction(mem_, kArkodeCflFraction), "SetCFLFraction");
+      checkArkode(ARKStepSetFixedStepBounds(mem_, 1.0, 1.0), "SetFixedStepBounds");
+      if (initial_step_ > 0) checkArkode(ARKStepSetInitStep(mem_, initial_step_), "SetInitStep");
     }
   }
 
   bool advance(double tout) override {
-    check(ARKStepSetStopTime(mem_, tout), "SetStopTime");
+    checkArkode(ARKStepSetStopTime(mem_, tout), "SetStopTime");
     const int mode = adaptive_ && !resizable_ ? ARK_NORMAL : ARK_ONE_STEP;
     while (t_ < tout) {
       if (!adaptive_) {
         double h = control_.fixed_step > 0 ? control_.fixed_step : limits().smallest();
         if (!std::isfinite(h))
           throw InputError("integrator: no stability limit bounds the time step; set integrator.max_step or integrator.step (s)");
-        check(ARKStepSetFixedStep(mem_, h), "SetFixedStep");
+        checkArkode(ARKStepSetFixedStep(mem_, h), "SetFixedStep");
       }
       double t = t_;
       const int flag = ARKStepEvolve(mem_, tout, y_, &t, mode);
       t_ = t;
-      if (stop_requested_) return false;
-      if (!pending_error_.empty()) throw NumericalFailure(pending_error_);
+      if (callbacks_.stop_requested) return false;
+      if (!callbacks_.pending_error.empty()) throw NumericalFailure(callbacks_.pending_error);
       if (flag < 0) {
         std::ostringstream os;
-        os << "ARKODE " << name() << " (" << pair_.name << ") failed at t = " << t_ << " s: " << flagName(flag);
+        os << "ARKODE " << name() << " (" << pair_.name << ") failed at t = " << t_ << " s: " << arkodeFlagName(flag);
         if (flag == ARK_ERR_FAILURE || flag == ARK_TOO_CLOSE)
           os << " (the error test failed repeatedly or the step became too small: the solution is blowing up or the tolerances are too tight)";
         if (flag == ARK_CONV_FAILURE || flag == ARK_LSOLVE_FAIL)
@@ -183,7 +174,7 @@ class ArkodeImex final : public Integrator {
     if (atol_) N_VDestroy(atol_);
     atol_ = N_VClone(y_);
     fillTolerances(N_VGetArrayPointer(atol_), sys_->size(), sys_->segments(), tol_.atol_by_segment);
-    check(ARKStepSVtolerances(mem_, tol_.rtol, atol_), "SVtolerances");
+    checkArkode(ARKStepSVtolerances(mem_, tol_.rtol, atol_), "SVtolerances");
   }
 
   // Matrix-free GMRES on the stage systems (I - gamma J) x = b, J w from jtimes.
@@ -191,9 +182,9 @@ class ArkodeImex final : public Integrator {
     if (linear_solver_) SUNLinSolFree(linear_solver_);
     linear_solver_ = SUNLinSol_SPGMR(y_, SUN_PREC_RIGHT, kKrylovDimension, sunctx_);
     if (!linear_solver_) throw std::runtime_error("SUNLinSol_SPGMR failed");
-    check(ARKStepSetLinearSolver(mem_, linear_solver_, nullptr), "SetLinearSolver");
-    check(ARKStepSetJacTimes(mem_, nullptr, &ArkodeImex::jtimes), "SetJacTimes");
-    check(ARKStepSetPreconditioner(mem_, &ArkodeImex::preconditionerSetup, &ArkodeImex::preconditionerSolve),
+    checkArkode(ARKStepSetLinearSolver(mem_, linear_solver_, nullptr), "SetLinearSolver");
+    checkArkode(ARKStepSetJacTimes(mem_, nullptr, &ArkodeImex::jtimes), "SetJacTimes");
+    checkArkode(ARKStepSetPreconditioner(mem_, &ArkodeImex::preconditionerSetup, &ArkodeImex::preconditionerSolve),
           "SetPreconditioner");
     jacobian_diagonal_.assign(sys_->size(), 0.0);
     inverse_preconditioner_.assign(sys_->size(), 1.0);
@@ -202,28 +193,18 @@ class ArkodeImex final : public Integrator {
   void resize(double tout) {
     double* y = sys_->resizeState(t_, N_VGetArrayPointer(y_));
     N_Vector fresh = wrapState(y, sys_->size(), sunctx_);
-    check(ARKStepResize(mem_, fresh, 1.0, t_, nullptr, nullptr), "Resize");
+    checkArkode(ARKStepResize(mem_, fresh, 1.0, t_, nullptr, nullptr), "Resize");
     N_VDestroy(y_);
     y_ = fresh;
     setTolerances();
     attachLinearSolver();  // its work vectors have the old length
-    check(ARKStepSetStopTime(mem_, tout), "SetStopTime");
-  }
-
-  static void check(int flag, const char* what) {
-    if (flag != ARK_SUCCESS) throw std::runtime_error(std::string("ARKODE ") + what + ": " + flagName(flag));
+    checkArkode(ARKStepSetStopTime(mem_, tout), "SetStopTime");
   }
 
   // Right-hand sides must not throw through C code: failures are kept and reported after
   // ARKStepEvolve returns.
   int evaluate(RhsPart part, double t, const double* y, double* ydot) {
-    try {
-      sys_->rhsPart(part, t, y, ydot);
-      return 0;
-    } catch (const std::exception& e) {
-      pending_error_ = e.what();
-      return -1;
-    }
+    return callbacks_.guarded([&] { sys_->rhsPart(part, t, y, ydot); });
   }
   static int explicitRhs(realtype t, N_Vector y, N_Vector ydot, void* data) {
     return static_cast<ArkodeImex*>(data)->evaluate(RhsPart::explicit_part, t, N_VGetArrayPointer(y), N_VGetArrayPointer(ydot));
@@ -294,24 +275,11 @@ class ArkodeImex final : public Integrator {
   }
 
   static int postStep(realtype t, N_Vector y, void* data) {
-    auto* self = static_cast<ArkodeImex*>(data);
-    const double h = t - self->t_last_accepted_;
-    self->t_last_accepted_ = t;
-    try {
-      if (!self->sys_->afterStep(t, h, N_VGetArrayPointer(y))) {
-        self->stop_requested_ = true;
-        return -1;
-      }
-    } catch (const std::exception& e) {
-      self->pending_error_ = e.what();
-      return -1;
-    }
-    return 0;
+    return static_cast<ArkodeImex*>(data)->callbacks_.afterStep(t, N_VGetArrayPointer(y));
   }
 
   static int stability(N_Vector, realtype, realtype* hstab, void* data) {
-    const double h = static_cast<ArkodeImex*>(data)->limits().smallest();
-    *hstab = std::isfinite(h) ? h / kCflFraction : -1.0;  // a non-positive value means "no limit"
+    *hstab = arkodeStabilityStep(static_cast<ArkodeImex*>(data)->limits().smallest());
     return 0;
   }
 
@@ -325,12 +293,11 @@ class ArkodeImex final : public Integrator {
   SUNLinearSolver linear_solver_ = nullptr;
   N_Vector y_ = nullptr, atol_ = nullptr;
   OdeSystem* sys_ = nullptr;
-  double t_ = 0, t_last_accepted_ = 0;
-  bool stop_requested_ = false;
+  double t_ = 0;
   bool resizable_ = false;
   std::uint64_t jtimes_evals_ = 0;  // implicit evaluations for J w and the preconditioner
   std::vector<double> jacobian_diagonal_, inverse_preconditioner_;
-  std::string pending_error_;
+  ArkodeCallbackState callbacks_;
 };
 
 // integrator.table: the pair's name (ARK324L2SA) or the name of either of its tables.
