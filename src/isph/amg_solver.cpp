@@ -74,6 +74,7 @@ class AmgKrylovSolver final : public LinearSolver {
   AmgKrylovSolver(const AmgKrylovSolver&) = delete;
   AmgKrylovSolver& operator=(const AmgKrylovSolver&) = delete;
   std::string name() const override { return name_; }
+  void prepare() override { initialiseHypre(); }
 
   SolveReport solve(const SparseRowMatrix& A, bool pattern_changed, const Eigen::VectorXd& b,
                     Eigen::VectorXd& x) override {

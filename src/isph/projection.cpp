@@ -155,7 +155,9 @@ void Projection<D>::storePressure(const StepContext<D>& sys) {
 
 template <int D>
 void Projection<D>::start(StepContext<D>& sys, double t, double* y) {
+  solver_->prepare();
   if (carried_ == CarriedPressure::none) return;
+  const auto t0 = Clock::now();
   ParticleSet<D>& P = sys.particles;
   const std::size_t n = P.n_moving;
   // The pressure-free acceleration of the initial state (the pressure field is zero).
@@ -175,10 +177,12 @@ void Projection<D>::start(StepContext<D>& sys, double t, double* y) {
   system_->assemble(sys, 1.0, laplacian_, *unknowns_, *gradient_rows_, *walls_, divergence_, pressure_->data.data(),
                     *pressure_matrix_);
   solution_.setZero(static_cast<Eigen::Index>(unknowns_->count));
+  const auto t1 = Clock::now();
   const SolveReport rep = unknowns_->count ? solver_->solve(pressure_matrix_->matrix, pressure_matrix_->pattern_changed,
                                                             system_->rhs(), solution_)
                                            : SolveReport{true, 0, 0.0, {}};
   if (!rep.ok) throw NumericalFailure("ISPH initial pressure solve failed: " + rep.message);
+  initial_ = InitialSolve{unknowns_->count, rep.iterations, rep.residual, seconds(t0, t1), seconds(t1, Clock::now())};
   storePressure(sys);
   sys.unpack(y);  // the velocities back
 }
@@ -375,6 +379,12 @@ void Projection<D>::summarize(nlohmann::json& s) const {
   j["max_divergence_ratio"] = divergence_ratio_max_;
   j["pressure_pinned"] = unknowns_->pinned;
   j["divergence_cleaning"] = cleaning_ != nullptr;
+  if (initial_)
+    j["initial_solve"] = {{"unknowns", initial_->unknowns},
+                          {"iterations", initial_->iterations},
+                          {"relative_residual", initial_->relative_residual},
+                          {"assembly_seconds", initial_->assembly_seconds},
+                          {"solve_seconds", initial_->solve_seconds}};
   if (cleaning_) {
     j["cleaning_iterations_total"] = cleaning_->iterations_total;
     j["cleaning_iterations_max"] = cleaning_->iterations_max;

@@ -55,6 +55,10 @@ class LinearSolver {
   // pattern_changed: A's sparsity pattern differs from the previous call's.
   virtual SolveReport solve(const SparseRowMatrix& A, bool pattern_changed, const Eigen::VectorXd& b,
                             Eigen::VectorXd& x) = 0;
+  // Starts what the solver needs once per process before its first solve (the AMG solver: MPI
+  // and hypre), so that the first solve's time is the solve's; a run calls it when it is about
+  // to solve (never `vesph check`).
+  virtual void prepare() {}
 };
 
 std::unique_ptr<LinearSolver> makeLinearSolver(const LinearSolverOptions& options);

@@ -9,7 +9,7 @@ Usage
 -----
     /usr/bin/python3 tools/isph_bench.py [--vesph build/vesph] [--sizes 100,200,400]
         [--steps 5] [--solvers umfpack,klu,bicgstab+diagonal,bicgstab+ilut,bicgstab+amg]
-        [--threads 1[,2]] [--csv FILE] [--png FILE]
+        [--threads 1[,2]] [--dimension 2|3] [--csv FILE] [--png FILE]
 
 A solver is `umfpack`, `klu`, or KRYLOV+PRECONDITIONER (`bicgstab`, `cg`, `gmres` with
 `diagonal`, `ilut`, `amg`); `bicgstab+amg:K` keeps each multigrid hierarchy for K solves
@@ -19,6 +19,9 @@ The scene is cases/hydrostatic_tank_isph.toml scaled: N particles across the 0.1
 width (dx = 0.1/N), walls 5 layers thick, a fixed step of 1e-3 s (the solve does not depend on
 it), water viscosity so that the step stays below the stability limits at every size; the
 figures are the means over the steps (the first step's symbolic analysis included).
+`--dimension 3` runs the same tank as a cube of N^3 fluid particles with Wendland C2 (h = 1.3 dx,
+support 2.6 dx: about 74 neighbours, where the 2D tank's quintic with h = 1.6 dx would give 460
+in 3D) and walls 3 layers thick on the floor and the four sides.
 """
 import argparse
 import json
@@ -76,6 +79,60 @@ end = {end}
 """
 
 
+SCENE_3D = """name = "isph_bench"
+dimension = 3
+[domain]
+min = [{lo}, {lo}, {lo}]
+max = [{hi}, {hi}, {top}]
+[particles]
+spacing = {dx}
+kernel = "wendland_c2"
+smoothing_ratio = 1.3
+[fluid]
+density = 1000.0
+viscosity = 1.0e-3
+[[blocks]]
+kind = "fluid"
+min = [0.0, 0.0, 0.0]
+max = [0.1, 0.1, 0.1]
+[[blocks]]
+kind = "wall"
+min = [{lo}, {lo}, {lo}]
+max = [{hi}, {hi}, 0.0]
+[[blocks]]
+kind = "wall"
+min = [{lo}, {lo}, 0.0]
+max = [0.0, {hi}, {top}]
+[[blocks]]
+kind = "wall"
+min = [0.1, {lo}, 0.0]
+max = [{hi}, {hi}, {top}]
+[[blocks]]
+kind = "wall"
+min = [0.0, {lo}, 0.0]
+max = [0.1, 0.0, {top}]
+[[blocks]]
+kind = "wall"
+min = [0.0, 0.1, 0.0]
+max = [0.1, {hi}, {top}]
+[solver]
+scheme = "isph"
+{solver}
+[effects.pressure_gradient]
+form = "renormalised"
+[effects.viscosity]
+[effects.body_force]
+acceleration = [0.0, 0.0, -9.81]
+[effects.free_surface]
+threshold = 0.97
+[integrator]
+type = "leapfrog"
+step = 1e-3
+[time]
+end = {end}
+"""
+
+
 def is_direct(name):
     return name in ("umfpack", "klu")
 
@@ -91,7 +148,7 @@ def solver_keys(name):
     return keys
 
 
-def plot(rows, path):
+def plot(rows, path, dimension=2):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -112,7 +169,7 @@ def plot(rows, path):
     ax_i.set_yscale("log")
     ax_i.grid(True, which="both", alpha=0.3)
     ax_i.legend(fontsize=7)
-    fig.suptitle("ISPH hydrostatic tank (2D): pressure solve against size")
+    fig.suptitle(f"ISPH hydrostatic tank ({dimension}D): pressure solve against size")
     fig.tight_layout()
     fig.savefig(path, dpi=110)
 
@@ -120,7 +177,9 @@ def plot(rows, path):
 def main(argv=None):
     ap = argparse.ArgumentParser(prog="isph_bench.py", description=__doc__.split("\n\n")[0])
     ap.add_argument("--vesph", default=DEFAULT_VESPH)
-    ap.add_argument("--sizes", default="100,200,400", help="particles across the tank (N: N^2 fluid particles)")
+    ap.add_argument("--sizes", default="100,200,400", help="particles across the tank (N: N^D fluid particles)")
+    ap.add_argument("--dimension", type=int, choices=(2, 3), default=2,
+                    help="2: the square tank (quintic, walls 5 layers); 3: the cube (Wendland C2, walls 3 layers)")
     ap.add_argument("--steps", type=int, default=5)
     ap.add_argument("--solvers", default="umfpack,klu,bicgstab+diagonal,bicgstab+ilut,bicgstab+amg")
     ap.add_argument("--threads", default="1", help="comma-separated thread counts (OMP_NUM_THREADS)")
@@ -137,28 +196,33 @@ def main(argv=None):
         ap.error(f"{a.vesph}: no such file (build vesph first, or give --vesph)")
     rows = []
     print(f"{'N_fluid':>8} {'solver':>18} {'thr':>3} {'unknowns':>9} {'assembly_s':>11} {'solve_s':>10} "
-          f"{'projection_s':>13} {'step_s':>9} {'iterations':>10}")
+          f"{'projection_s':>13} {'step_s':>9} {'iterations':>10} {'cold_solve_s':>12} {'cold_iter':>9} {'peak_GiB':>8}")
     with tempfile.TemporaryDirectory() as work:
         for n in (int(s) for s in a.sizes.split(",")):
             dx = 0.1 / n
-            lo, hi, top = -5 * dx, 0.1 + 5 * dx, 0.1 + 8 * dx
+            layers = 5 if a.dimension == 2 else 3
+            lo, hi, top = -layers * dx, 0.1 + layers * dx, 0.1 + 8 * dx
+            n_fluid = n ** a.dimension
+            template = SCENE if a.dimension == 2 else SCENE_3D
             for solver, threads in ((s, int(t)) for s in a.solvers.split(",") for t in a.threads.split(",")):
                 env = dict(os.environ, OMP_NUM_THREADS=str(threads))
                 if is_direct(solver) and n > a.direct_up_to:
-                    print(f"{n*n:8d} {solver:>18} skipped (--direct-up-to {a.direct_up_to})")
+                    print(f"{n_fluid:8d} {solver:>18} skipped (--direct-up-to {a.direct_up_to})")
                     continue
                 if not is_direct(solver) and "+amg" not in solver and n > a.unpreconditioned_up_to:
-                    print(f"{n*n:8d} {solver:>18} skipped (--unpreconditioned-up-to {a.unpreconditioned_up_to})")
+                    print(f"{n_fluid:8d} {solver:>18} skipped (--unpreconditioned-up-to {a.unpreconditioned_up_to})")
                     continue
                 scene = os.path.join(work, "bench.toml")
                 with open(scene, "w") as f:
-                    f.write(SCENE.format(lo=repr(lo), hi=repr(hi), top=repr(top), dx=repr(dx),
+                    f.write(template.format(lo=repr(lo), hi=repr(hi), top=repr(top), dx=repr(dx),
                                          solver=solver_keys(solver), end=repr(a.steps * 1e-3)))
                 out = os.path.join(work, "out")
-                r = subprocess.run([a.vesph, "run", scene, "-o", out, "--quiet"], env=env,
+                # /usr/bin/time -f %M: the run's peak resident memory (KiB), for the memory target
+                timed = ["/usr/bin/time", "-f", "%M"] if os.path.exists("/usr/bin/time") else []
+                r = subprocess.run(timed + [a.vesph, "run", scene, "-o", out, "--quiet"], env=env,
                                    capture_output=True, text=True)
                 if r.returncode != 0:
-                    print(f"{n*n:8d} {solver:>18} {threads:3d} failed (exit {r.returncode}): {r.stderr.strip()[-300:]}")
+                    print(f"{n_fluid:8d} {solver:>18} {threads:3d} failed (exit {r.returncode}): {r.stderr.strip()[-300:]}")
                     continue
                 with open(os.path.join(out, "summary.json")) as f:
                     s = json.load(f)
@@ -166,21 +230,30 @@ def main(argv=None):
                 k = max(i["solves"], 1)
                 with Output(os.path.join(out, "isph_bench.h5")) as h:
                     unknowns = int(h.diagnostics("pressure_unknowns")[0][-1])
-                row = (n * n, solver, unknowns, i["assembly_seconds"] / k, i["solve_seconds"] / k,
+                cold = i.get("initial_solve", {})
+                try:
+                    peak_gib = int(r.stderr.strip().splitlines()[-1]) / 2**20 if timed else float("nan")
+                except (ValueError, IndexError):
+                    peak_gib = float("nan")
+                row = (n_fluid, solver, unknowns, i["assembly_seconds"] / k, i["solve_seconds"] / k,
                        (i["assembly_seconds"] + i["solve_seconds"] + i["correction_seconds"]) / k,
-                       s["wall_seconds"] / max(s["steps"], 1), i["iterations_mean"], threads)
+                       s["wall_seconds"] / max(s["steps"], 1), i["iterations_mean"], threads,
+                       cold.get("solve_seconds", float("nan")), cold.get("iterations", -1), peak_gib)
                 rows.append(row)
                 print(f"{row[0]:8d} {row[1]:>18} {threads:3d} {row[2]:9d} {row[3]:11.4f} {row[4]:10.4f} "
-                      f"{row[5]:13.4f} {row[6]:9.4f} {row[7]:10.1f}")
+                      f"{row[5]:13.4f} {row[6]:9.4f} {row[7]:10.1f} {row[9]:12.4f} {row[10]:9d} {row[11]:8.2f}")
                 sys.stdout.flush()
-    print(f"# means over {a.steps} steps; Krylov tolerance 1e-8 (relative residual)")
+    print(f"# means over {a.steps} steps (warm-started from the previous pressure); cold = the initial "
+          "pressure solve from a zero guess (its set-up included); Krylov tolerance 1e-8 (relative residual); "
+          "peak = the run's peak resident memory")
     if a.csv:
         with open(a.csv, "w") as f:
-            f.write("fluid_particles,solver,unknowns,assembly_s,solve_s,projection_s,step_s,iterations,threads\n")
+            f.write("fluid_particles,solver,unknowns,assembly_s,solve_s,projection_s,step_s,iterations,threads,"
+                    "cold_solve_s,cold_iterations,peak_GiB\n")
             for r in rows:
                 f.write(",".join(str(x) for x in r) + "\n")
     if a.png and rows:
-        plot(rows, a.png)
+        plot(rows, a.png, a.dimension)
     return 0
 
 
