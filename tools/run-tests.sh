@@ -6,6 +6,10 @@ cd "$(dirname "$0")/.."
 sh tools/install-deps.sh
 cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
 cmake --build build
+# One thread per test: ctest runs two tests side by side on the two cores, and two OpenMP teams of
+# two threads each on two cores wait at every barrier for a descheduled thread. The thread paths
+# are tested by cli.threads (--threads 1 against --threads 2, which overrides this).
+export OMP_NUM_THREADS=1
 ctest --test-dir build --output-on-failure -j 2
 
 # Sanitizer build (address + undefined behaviour, CMake option VESPH_SANITIZE) in build-asan: every
