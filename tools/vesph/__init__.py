@@ -31,6 +31,7 @@ TOOL_MODULES = {
     "xpp_steady_shear": "vesph.checks.xpp_shear",
     "couette_check": "vesph.checks.couette",
     "rotation_check": "vesph.checks.rotating_box",
+    "circular_couette_check": "vesph.checks.circular_couette",
     "hydrostatic_check": "vesph.measure.hydrostatic",
     "inflow_check": "vesph.measure.inflow",
     "drop_measure": "vesph.measure.drop",

@@ -3,6 +3,7 @@ docs/validation.md), in SI units:
 
 * analytic_velocity: transient plane Poiseuille flow from rest (Newtonian, series solution);
 * couette_startup: start-up of plane Couette flow, one wall set moving (Newtonian, series);
+* circular_couette: steady circular Couette flow between two rotating cylinders (Newtonian);
 * waters_king: Waters & King's start-up of Oldroyd-B channel flow (dimensionless);
 * coefficients, steady_stresses, startup_velocity: the second-order fluid in channel flow;
 * Xpp, steady_shear, steady_shear_ode, channel_reference, startup_1d: the extended Pom-Pom
@@ -70,6 +71,26 @@ def analytic_velocity(y, t, F, nu, H, y0=0.0):
             break
     out = steady - total
     return float(out[0]) if scalar else out
+
+
+# --------------------------------------------------------------- circular Couette (steady)
+def circular_couette(r, R1, R2, omega1, omega2=0.0):
+    """Steady azimuthal velocity [m/s] between an inner cylinder of radius R1 turning at omega1
+    and an outer one of radius R2 turning at omega2 (Newtonian, incompressible; the solution of
+    d/dr (1/r d(r v)/dr) = 0 with v(R1) = omega1 R1, v(R2) = omega2 R2):
+
+        v(r) = A r + B / r,  A = (omega2 R2^2 - omega1 R1^2) / (R2^2 - R1^2),
+                             B = (omega1 - omega2) R1^2 R2^2 / (R2^2 - R1^2).
+
+    r [m] (scalar or array), 0 < R1 < R2 [m], omega [rad/s]. Float for scalar r, else an array.
+    """
+    if not 0 < R1 < R2:
+        raise ValueError("circular_couette: 0 < R1 < R2")
+    A = (omega2 * R2 * R2 - omega1 * R1 * R1) / (R2 * R2 - R1 * R1)
+    B = (omega1 - omega2) * R1 * R1 * R2 * R2 / (R2 * R2 - R1 * R1)
+    r = np.asarray(r, dtype=np.float64)
+    out = A * r + B / r
+    return float(out) if out.ndim == 0 else out
 
 
 # --------------------------------------------------------------- plane Couette start-up
