@@ -62,9 +62,28 @@ std::unique_ptr<InflowOutflow<D>> InflowOutflow<D>::fromConfig(ConfigTable& root
       hook->mean_velocity_ = in.number("mean_velocity", std::nullopt, Bound::positive, "m/s");
       hook->ramp_time_ = in.number("ramp_time", 0.0, Bound::nonnegative, "s");
     }
+    if (in.has("radius")) {
+      if (D == 2) in.fail("radius", "only in 3D (a circular nozzle's cross-section; in 2D the buffer box is the nozzle)");
+      if (hook->extrapolated_)
+        in.fail("radius", "only with velocity = \"prescribed\" (the extrapolated buffer follows the fluid lane by lane "
+                          "on the lattice of a box)");
+      if (in.has("profile_axis")) in.fail("profile_axis", "absent with radius (the nozzle's profile is radial)");
+      hook->nozzle_radius_ = in.number("radius", std::nullopt, Bound::positive, "m");
+      if (hook->nozzle_radius_ < dx * (1 - 1e-9)) in.fail("radius", "at least one particle spacing");
+      for (int a = 0; a < D; ++a)
+        if (a != ax && hi[a] - lo[a] < 2 * hook->nozzle_radius_ * (1 - 1e-9)) {
+          std::ostringstream os;
+          os << "a circle of diameter " << 2 * hook->nozzle_radius_ << " m inside the buffer box's cross-section, which is "
+             << hi[a] - lo[a] << " m wide along axis " << a;
+          in.fail("radius", os.str());
+        }
+      hook->placeNozzle(p, lo, hi, n, dx, rho0, next_id);
+    }
     int across = D == 2 ? 1 - ax : -1;
     double width = 0;  // of the parabolic profile
-    if (hook->profile_ == "parabolic") {
+    if (hook->nozzle_radius_ > 0) {
+      // placed above
+    } else if (hook->profile_ == "parabolic") {
       if (D == 3 || in.has("profile_axis"))
         across = static_cast<int>(in.integer("profile_axis", D == 2 ? std::optional<long long>(1 - ax) : std::nullopt, 0, D - 1));
       if (across == ax) in.fail("profile_axis", "an axis across the flow direction (not the flow axis)");
@@ -74,7 +93,7 @@ std::unique_ptr<InflowOutflow<D>> InflowOutflow<D>::fromConfig(ConfigTable& root
     long total = 1;
     for (int a = 0; a < D; ++a) total *= n[a];
     const double mass = rho0 * std::pow(dx, D);
-    for (long k = 0; k < total; ++k) {
+    for (long k = 0; k < (hook->nozzle_radius_ > 0 ? 0 : total); ++k) {
       long rem = k;
       Vec<D> x;
       for (int a = 0; a < D; ++a) {
@@ -122,6 +141,52 @@ std::unique_ptr<InflowOutflow<D>> InflowOutflow<D>::fromConfig(ConfigTable& root
   }
   hook->fluid_count_ = p.n_moving;
   return hook;
+}
+
+template <int D>
+void InflowOutflow<D>::placeNozzle(ParticleSet<D>& p, const Vec<D>& lo, const Vec<D>& hi, const std::array<long, D>& n,
+                                   double dx, double rho0, std::uint64_t& next_id) {
+  // Rings about the axis through the cross-section's centre, in the order and orientation of a
+  // `cylinder` block along +e_axis (src/sim/particle_generation.cpp, placeRings), so that a
+  // fluid cylinder downstream continues the buffer's rings: transverse unit vectors u = e_y for
+  // a flow along x, else e_x, and v = e x u; every other ring turned by half a step.
+  const int ax = axis_;
+  const double pi = std::numbers::pi, R = nozzle_radius_;
+  Vec<D> e = Vec<D>::Zero(), u = Vec<D>::Zero(), v = Vec<D>::Zero(), centre = 0.5 * (lo + hi);
+  e[ax] = 1;
+  if constexpr (D == 3) {
+    u[ax == 0 ? 1 : 0] = 1;
+    v = Vec<D>(e[1] * u[2] - e[2] * u[1], e[2] * u[0] - e[0] * u[2], e[0] * u[1] - e[1] * u[0]);
+  }
+  const long n_r = std::max(1L, std::lround(R / dx));
+  const double dr = R / static_cast<double>(n_r);
+  for (long j = 0; j < n[ax]; ++j) {
+    Vec<D> station = centre;
+    station[ax] = lo[ax] + (static_cast<double>(j) + 0.5) * dx;
+    for (long k = 0; k < n_r; ++k) {
+      const double r = (static_cast<double>(k) + 0.5) * dr;
+      const long count = std::max(1L, std::lround(2 * pi * r / dx));
+      const double step = 2 * pi / static_cast<double>(count), phase = (k % 2) * 0.5 * step;
+      const double mass = rho0 * 2 * pi * r * dr * dx / static_cast<double>(count);
+      // The ring carries its annulus' area-weighted mean speed, 2U (1 - (r_in^2 + r_out^2) / 2R^2)
+      // for the parabola, so that the rings' flow rate sum_k m_k u_k / dx is exactly U pi R^2 (the
+      // ring midpoint's speed would be short by dr^2 / 2R^2 of it).
+      const double r_in = r - 0.5 * dr, r_out = r + 0.5 * dr;
+      const double speed = profile_ == "parabolic"
+                               ? 2.0 * mean_velocity_ * (1.0 - (r_in * r_in + r_out * r_out) / (2 * R * R))
+                               : mean_velocity_;
+      for (long i = 0; i < count; ++i) {
+        const double theta = phase + step * static_cast<double>(i);
+        const Vec<D> x = station + r * (std::cos(theta) * u + std::sin(theta) * v);
+        Vec<D> vel = Vec<D>::Zero();
+        vel[ax] = sign_ * speed * rampFactor(0.0);
+        buffer_.push_back(p.nFixed());
+        speed_.push_back(speed);
+        lane_.push_back(laneOf(x));
+        p.add(x, vel, rho0, mass, ParticleKind::inflow, next_id++);
+      }
+    }
+  }
 }
 
 template <int D>
@@ -282,6 +347,7 @@ void InflowOutflow<D>::summarize(nlohmann::json& summary) const {
     if (!extrapolated_) {
       j["mean_velocity"] = mean_velocity_;
       j["profile"] = profile_;
+      if (nozzle_radius_ > 0) j["nozzle_radius"] = nozzle_radius_;
     } else {
       double mean = 0;
       for (double u : lane_speed_) mean += u;
@@ -300,7 +366,9 @@ std::string InflowOutflow<D>::describe() const {
        << "per lane) along " << (sign_ > 0 ? "+" : "-") << axes[axis_] << " through the inlet " << axes[axis_] << " = "
        << inlet_ << " m (buffer depth " << depth_ << " m)\n";
   else if (!buffer_.empty())
-    os << "# inflow: " << buffer_.size() << " buffer particles, " << profile_ << " profile of mean " << mean_velocity_
+    os << "# inflow: " << buffer_.size() << " buffer particles"
+       << (nozzle_radius_ > 0 ? ", a circular nozzle of radius " + std::to_string(nozzle_radius_) + " m" : std::string())
+       << ", " << profile_ << " profile of mean " << mean_velocity_
        << " m/s along " << (sign_ > 0 ? "+" : "-") << axes[axis_] << " through the inlet " << axes[axis_] << " = "
        << inlet_ << " m (buffer depth " << depth_ << " m" << (ramp_time_ > 0 ? ", ramped over " : "")
        << (ramp_time_ > 0 ? std::to_string(ramp_time_) + " s" : std::string()) << ")\n";

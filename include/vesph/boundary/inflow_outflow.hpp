@@ -12,6 +12,14 @@
 //   uniform    u = U
 //   parabolic  u = 6 U eta (1 - eta), eta = (s - s_min) / (s_max - s_min)   (plane Poiseuille,
 //              fully developed; U its mean over the width, the flow rate U W per unit depth)
+// A circular nozzle (3D, `radius` R): the buffer's particles on rings about the box's
+// cross-section centre (as a `cylinder` block along the flow axis places them: ring k at
+// r_k = (k + 1/2) dr, dr = R / round(R / dx), round(2 pi r_k / dx) particles, mass rho0 times the
+// ring cell's volume), one station per spacing along the flow, and
+//   uniform    u = U
+//   parabolic  u = 2 U (1 - r^2 / R^2)   (Hagen-Poiseuille, U its mean over the disk, the flow
+//              rate U pi R^2; each ring moves at its annulus' mean of u, so that the rings
+//              carry exactly that rate)
 // optionally ramped up from rest over ramp_time by 0.5 (1 - cos(pi t / T)) (the positions
 // advance by the exact integral of the ramped speed). The buffer is at least one kernel support
 // deep, so a fluid particle at the inlet has a full support. A buffer particle that crosses the
@@ -79,17 +87,22 @@ class InflowOutflow final : public StepHook<D> {
     e[axis_] = sign_;
     return e;
   }
-  // The largest prescribed buffer speed (1.5 U for the parabola, U uniform), m/s; 0 without
+  // The largest prescribed buffer speed (1.5 U for the parabola, 2 U in a circular nozzle, U
+  // uniform), m/s; 0 without
   // a prescribed inflow.
   double prescribedPeakSpeed() const {
     if (buffer_.empty() || extrapolated_) return 0.0;
-    return profile_ == "parabolic" ? 1.5 * mean_velocity_ : mean_velocity_;
+    if (profile_ != "parabolic") return mean_velocity_;
+    return nozzle_radius_ > 0 ? 2.0 * mean_velocity_ : 1.5 * mean_velocity_;
   }
   // The buffer's speed factor at time t (the ramp) and its integral from 0 to t.
   double rampFactor(double t) const;
   double rampIntegral(double t) const;
 
  private:
+  // The circular nozzle's buffer particles (radius nozzle_radius_; fromConfig).
+  void placeNozzle(ParticleSet<D>& p, const Vec<D>& lo, const Vec<D>& hi, const std::array<long, D>& n, double dx,
+                   double rho0, std::uint64_t& next_id);
   // Inflow.
   std::vector<std::size_t> buffer_;  // buffer particles as offsets into the fixed particles
   std::vector<double> speed_;        // their full prescribed speed u(s), m/s
@@ -105,6 +118,7 @@ class InflowOutflow final : public StepHook<D> {
   double spacing_ = 0;
   Vec<D> lo_ = Vec<D>::Zero();
   std::array<long, D> counts_{};
+  double nozzle_radius_ = 0;  // m; 0: the whole box (no circular nozzle)
   std::vector<long> lane_;  // per buffer particle
   std::vector<double> lane_speed_, lane_sum_, lane_trail_, lane_lead_, lane_shift_;
   std::vector<long> lane_count_;
