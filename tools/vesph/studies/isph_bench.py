@@ -149,29 +149,47 @@ def solver_keys(name):
 
 
 def plot(rows, path, dimension=2):
+    """Left: the cold solve (from a zero guess, AMG set-up included) and the steps' warm-started
+    solve against size; right: their Krylov iterations."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     fig, (ax_t, ax_i) = plt.subplots(1, 2, figsize=(11, 4.2))
-    for key in sorted({(r[1], r[8]) for r in rows}):
+    for n, key in enumerate(sorted({(r[1], r[8]) for r in rows})):
         sel = sorted((r for r in rows if (r[1], r[8]) == key), key=lambda r: r[2])
         label = f"{key[0]}, {key[1]} thread{'s' if key[1] > 1 else ''}"
-        style = "-" if key[1] == 1 else "--"
-        ax_t.loglog([r[2] for r in sel], [r[4] for r in sel], style, marker="o", label=label)
+        colour = f"C{n}"
+        x = [r[2] for r in sel]
+        ax_t.loglog(x, [r[9] for r in sel], "-", color=colour, marker="o", label=f"{label}: cold")
+        ax_t.loglog(x, [r[4] for r in sel], ":", color=colour, marker=".", label=f"{label}: warm (per step)")
         if not is_direct(key[0]):
-            ax_i.semilogx([r[2] for r in sel], [r[7] for r in sel], style, marker="o", label=label)
+            ax_i.semilogx(x, [r[10] for r in sel], "-", color=colour, marker="o", label=f"{label}: cold")
+            ax_i.semilogx(x, [r[7] for r in sel], ":", color=colour, marker=".", label=f"{label}: warm")
     ax_t.set_xlabel("unknowns")
-    ax_t.set_ylabel("pressure solve per step [s]")
+    ax_t.set_ylabel("pressure solve [s]")
     ax_t.grid(True, which="both", alpha=0.3)
-    ax_t.legend(fontsize=7)
+    ax_t.legend(fontsize=6)
     ax_i.set_xlabel("unknowns")
     ax_i.set_ylabel("Krylov iterations per solve")
-    ax_i.set_yscale("log")
+    ax_i.set_yscale("symlog", linthresh=1)
     ax_i.grid(True, which="both", alpha=0.3)
-    ax_i.legend(fontsize=7)
-    fig.suptitle(f"ISPH hydrostatic tank ({dimension}D): pressure solve against size")
+    ax_i.legend(fontsize=6)
+    fig.suptitle(f"ISPH hydrostatic tank ({dimension}D): pressure solve against size "
+                 "(cold: from a zero guess; warm: the steps', from the last pressure)")
     fig.tight_layout()
     fig.savefig(path, dpi=110)
+
+
+def read_csv(path):
+    """The rows of a --csv file, as main() builds them (for replotting)."""
+    import csv
+    rows = []
+    with open(path) as f:
+        for d in csv.DictReader(f):
+            rows.append((int(d["fluid_particles"]), d["solver"], int(d["unknowns"]), float(d["assembly_s"]),
+                         float(d["solve_s"]), float(d["projection_s"]), float(d["step_s"]), float(d["iterations"]),
+                         int(d["threads"]), float(d["cold_solve_s"]), int(d["cold_iterations"]), float(d["peak_GiB"])))
+    return rows
 
 
 def main(argv=None):
