@@ -9,7 +9,8 @@ Modules
     limits       the explicit step limits with the C++ default coefficients
     analytic     Poiseuille start-up, Waters & King, second-order fluid channel, XPP shear
     checks.*     validation checks against analytic solutions, the output format checker
-    measure.*    drop impact, die swell, channel profiles, inflow, hydrostatic tank, dam-break front
+    measure.*    drop impact, die swell, channel profiles, inflow, hydrostatic tank, dam-break front,
+                 plane sections of 3D runs
     studies.*    parameter studies that run vesph (work-precision, CFL, sound speed,
                  convergence, die swell, ISPH linear solvers)
 
@@ -38,6 +39,7 @@ TOOL_MODULES = {
     "die_swell_measure": "vesph.measure.die_swell",
     "die_swell_lip": "vesph.measure.die_swell_lip",
     "startup_channel_profiles": "vesph.measure.channel_profiles",
+    "section": "vesph.measure.section",
     "study_work_precision": "vesph.studies.work_precision",
     "study_cfl": "vesph.studies.cfl",
     "study_sound_speed": "vesph.studies.sound_speed",
