@@ -12,7 +12,7 @@ Modules
     measure.*    drop impact, die swell, channel profiles, inflow, hydrostatic tank, dam-break front,
                  plane sections of 3D runs
     studies.*    parameter studies that run vesph (work-precision, CFL, sound speed,
-                 convergence, die swell, ISPH linear solvers)
+                 convergence, die swell, ISPH linear solvers, 3D performance)
 
 Each tool runs as `/usr/bin/python3 -m vesph.<package>.<tool>` with tools/ on the Python path,
 or through `tools/vesph-post <tool>` (which sets the path; `tools/vesph-post` lists the tools).
@@ -46,6 +46,7 @@ TOOL_MODULES = {
     "study_convergence": "vesph.studies.convergence",
     "die_swell_study": "vesph.studies.die_swell",
     "isph_bench": "vesph.studies.isph_bench",
+    "bench_3d": "vesph.studies.bench_3d",
     "peer_dam_break": "vesph.studies.peer_dam_break",
 }
 
