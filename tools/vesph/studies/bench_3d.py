@@ -45,7 +45,10 @@ import subprocess
 import sys
 
 from vesph import REPO
-from vesph.catalogue import DEFAULT_VESPH
+
+# build/vesph of this repository (as vesph.catalogue's default; not imported from there so that
+# this script needs the Python standard library only, e.g. on a benchmark machine without h5py)
+DEFAULT_VESPH = os.path.join(REPO, "build", "vesph")
 
 CASE_2D = os.path.join(REPO, "cases", "bench_periodic_box.toml")
 CASE_3D = os.path.join(REPO, "cases", "bench_periodic_box_3d.toml")
