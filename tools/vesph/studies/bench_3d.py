@@ -10,12 +10,16 @@ Usage
 -----
     tools/vesph-post bench_3d [--vesph build/vesph] [--rounds 5] [--steps-2d 20] [--steps-3d 20]
         [--memory-sizes 24,46] [--scaling-sizes 22,46,100] [--scaling-steps 4] [--scaling-rounds 3]
-        [--parts rate,threads,memory,scaling] [--json OUT.json]
+        [--parts rate,cpu_rate,threads,memory,scaling] [--json OUT.json]
 
-Parts (--parts, default all four)
+Parts (--parts, default all five)
     rate     pairs/s on one thread, 3D box against 2D box, alternating (each round: one 2D and
              one 3D `vesph bench --threads 1 --repeat 1`): the 3D rate, the 2D rate and the
              ratio 3D/2D per round; the target is >= 0.8.
+    cpu_rate as rate, per CPU second instead of wall second: the CPU time (user + system) of a
+             run of --steps-2d/--steps-3d steps minus that of a 2-step run (the scene set-up
+             cancels), against the pairs of the difference. The time a process waits for a CPU
+             on a busy machine does not count, so this ratio is the least distorted by load.
     threads  the 2-thread speed-up of each box: each round is one `vesph bench --threads 1,2
              --repeat 1` (1 and 2 threads alternate in one process); speed-up = pairs/s with 2
              threads / pairs/s with 1; the target is >= 1.8.
@@ -41,6 +45,7 @@ diagnostics; not the scene set-up). Exit status 0, or 1 when a run fails.
 import argparse
 import json
 import os
+import resource
 import statistics
 import subprocess
 import sys
@@ -74,7 +79,9 @@ def bench(vesph, case, steps, threads, sets=(), env=None):
            "--repeat", "1"]
     for s in sets:
         cmd += ["--set", s]
+    cpu0 = children_cpu()
     p = subprocess.run(cmd, capture_output=True, text=True, env=env)
+    cpu = children_cpu() - cpu0  # the child's CPU time, user + system, scene set-up included
     if p.returncode != 0:
         raise BenchError(f"{' '.join(cmd)} failed (exit {p.returncode}): {p.stderr.strip()[-400:]}")
     rows = []
@@ -86,7 +93,16 @@ def bench(vesph, case, steps, threads, sets=(), env=None):
             rows.append(dict(zip(keys, map(float, parts))))
     if len(rows) != len(threads):
         raise BenchError(f"{' '.join(cmd)}: could not read the table:\n{p.stdout}")
+    for r in rows:
+        r["cpu_s"] = cpu
+        r["pairs"] = r["pairs_s"] * r["wall_s"]
     return rows
+
+
+def children_cpu():
+    """CPU seconds (user + system) of the finished child processes so far."""
+    u = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return u.ru_utime + u.ru_stime
 
 
 def load():
@@ -115,6 +131,27 @@ def part_rate(a, res):
     print(f"2D: {spread(r2)} pairs/s; 3D: {spread(r3)} pairs/s; 3D/2D {spread(ratio)}"
           f" -> target >= 0.8 {'met' if statistics.median(ratio) >= 0.8 else 'NOT met'}")
     res["rate"] = {"pairs_s_2d": r2, "pairs_s_3d": r3, "ratio": ratio}
+
+
+def part_cpu_rate(a, res):
+    print(f"\n== cpu_rate: pairs per CPU second on one thread, 3D box against 2D box, {a.rounds} alternating rounds")
+    print("   (CPU time of a run of the given steps minus that of a 2-step run: the set-up cancels; time the")
+    print("   process waited for a CPU does not count, so this is the figure a busy machine distorts least)")
+    print(f"{'round':>5} {'2D pairs/cpu-s':>15} {'3D pairs/cpu-s':>15} {'3D/2D':>7}")
+    r2, r3, ratio = [], [], []
+    for k in range(a.rounds):
+        rates = []
+        for case, steps in ((CASE_2D, a.steps_2d), (CASE_3D, a.steps_3d)):
+            long_run = bench(a.vesph, case, steps, [1])[0]
+            short_run = bench(a.vesph, case, 2, [1])[0]
+            rates.append((long_run["pairs"] - short_run["pairs"]) / (long_run["cpu_s"] - short_run["cpu_s"]))
+        r2.append(rates[0])
+        r3.append(rates[1])
+        ratio.append(rates[1] / rates[0])
+        print(f"{k + 1:>5} {rates[0]:>15.4g} {rates[1]:>15.4g} {ratio[-1]:>7.3f}", flush=True)
+    print(f"2D: {spread(r2)}; 3D: {spread(r3)} pairs per CPU second; 3D/2D {spread(ratio)}"
+          f" -> target >= 0.8 {'met' if statistics.median(ratio) >= 0.8 else 'NOT met'}")
+    res["cpu_rate"] = {"pairs_per_cpu_s_2d": r2, "pairs_per_cpu_s_3d": r3, "ratio": ratio}
 
 
 def part_threads(a, res):
@@ -190,11 +227,12 @@ def main(argv=None):
     ap.add_argument("--scaling-sizes", type=sizes, default=[22, 46, 100])
     ap.add_argument("--scaling-steps", type=int, default=4)
     ap.add_argument("--scaling-rounds", type=int, default=3)
-    ap.add_argument("--parts", default="rate,threads,memory,scaling")
+    ap.add_argument("--parts", default="rate,cpu_rate,threads,memory,scaling")
     ap.add_argument("--json", metavar="OUT.json")
     a = ap.parse_args(argv)
     parts = a.parts.split(",")
-    known = {"rate": part_rate, "threads": part_threads, "memory": part_memory, "scaling": part_scaling}
+    known = {"rate": part_rate, "cpu_rate": part_cpu_rate, "threads": part_threads, "memory": part_memory,
+             "scaling": part_scaling}
     for p in parts:
         if p not in known:
             ap.error(f"unknown part {p!r} (choose from {', '.join(known)})")
