@@ -181,7 +181,7 @@ def plot(png, u, v, d, values, keep, fluid, field, unit, t, point, n, half):
     ax.set_aspect("equal")
     ax.set_xlabel("u [m]")
     ax.set_ylabel("v [m]")
-    ax.set_title(f"section at t = {t:.4g} s: point ({', '.join(f'{c:.3g}' for c in point)}), "
+    ax.set_title(f"section at t = {t:.4g} s, |d| < {half:.3g} m\npoint ({', '.join(f'{c:.3g}' for c in point)}) m, "
                  f"normal ({', '.join(f'{c:.2g}' for c in n)})", fontsize=9)
     if walls.size:
         ax.legend(loc="upper right", fontsize=8)
