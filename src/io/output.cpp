@@ -370,7 +370,10 @@ void OutputWriter<D>::writeXdmf() const {
     attribute("id", "Scalar", 0, "Int", 8);
     attribute("kind", "Scalar", 0, "UChar", 1);
     if (f.pressure) attribute("pressure", "Scalar", 0, "Float", 8);
-    if (f.stress) attribute("extra_stress", "Matrix", D == 2 ? 3 : 6, "Float", 8);
+    // 3D: "Tensor6", whose component order in XDMF (and in ParaView's XDMF reader, which expands
+    // it to a 3x3 tensor) is xx, xy, xz, yy, yz, zz, the order of the dataset, so the file is
+    // read as it is stored. 2D keeps "Matrix" (xx, xy, yy): XDMF has no 2D symmetric tensor.
+    if (f.stress) attribute("extra_stress", D == 2 ? "Matrix" : "Tensor6", D == 2 ? 3 : 6, "Float", 8);
     if (f.stress_zz) attribute("extra_stress_zz", "Scalar", 0, "Float", 8);
     if (f.free_surface) attribute("free_surface", "Scalar", 0, "UChar", 1);
     x << "   </Grid>\n";

@@ -9,9 +9,10 @@ Modules
     limits       the explicit step limits with the C++ default coefficients
     analytic     Poiseuille start-up, Waters & King, second-order fluid channel, XPP shear
     checks.*     validation checks against analytic solutions, the output format checker
-    measure.*    drop impact, die swell, channel profiles, inflow, hydrostatic tank, dam-break front
+    measure.*    drop impact, die swell, channel profiles, inflow, hydrostatic tank, dam-break front,
+                 plane sections of 3D runs
     studies.*    parameter studies that run vesph (work-precision, CFL, sound speed,
-                 convergence, die swell, ISPH linear solvers)
+                 convergence, die swell, ISPH linear solvers, 3D performance)
 
 Each tool runs as `/usr/bin/python3 -m vesph.<package>.<tool>` with tools/ on the Python path,
 or through `tools/vesph-post <tool>` (which sets the path; `tools/vesph-post` lists the tools).
@@ -39,12 +40,14 @@ TOOL_MODULES = {
     "die_swell_measure": "vesph.measure.die_swell",
     "die_swell_lip": "vesph.measure.die_swell_lip",
     "startup_channel_profiles": "vesph.measure.channel_profiles",
+    "section": "vesph.measure.section",
     "study_work_precision": "vesph.studies.work_precision",
     "study_cfl": "vesph.studies.cfl",
     "study_sound_speed": "vesph.studies.sound_speed",
     "study_convergence": "vesph.studies.convergence",
     "die_swell_study": "vesph.studies.die_swell",
     "isph_bench": "vesph.studies.isph_bench",
+    "bench_3d": "vesph.studies.bench_3d",
     "peer_dam_break": "vesph.studies.peer_dam_break",
 }
 
