@@ -193,7 +193,7 @@ PIPE_MODES = 4000   # Bessel modes summed: the velocity series' tail is below 1e
 @functools.lru_cache(maxsize=None)
 def pipe_modes(n=PIPE_MODES):
     """(j, c): the first n zeros j_k of J0 and the coefficients c_k = 8/(j_k^3 J1(j_k)) of the
-    Fourier-Bessel series 1 - x^2 = sum_k c_k J0(j_k x) on 0 <= x <= 1 (docs/theory.md: the
+    Fourier-Bessel series 1 - x^2 = sum_k c_k J0(j_k x) on 0 <= x <= 1 (docs/validation.md §16: the
     steady Hagen-Poiseuille profile; from int_0^1 x (1 - x^2) J0(j x) dx = 4 J1(j)/j^3 and the
     norm int_0^1 x J0(j x)^2 dx = J1(j)^2/2). Read-only arrays."""
     j = special.jn_zeros(0, n)
