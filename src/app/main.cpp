@@ -59,7 +59,7 @@ int runScene(Config& cfg, const SceneHeader& h, const std::string& out_dir, bool
 template <int D>
 int checkScene(Config& cfg, const SceneHeader& h) {
   Simulation<D> sim(cfg, h);
-  std::cout << sim.describe() << cfg.resolvedToml() << "\n";
+  std::cout << sim.describe() << sim.describeBlocks() << cfg.resolvedToml() << "\n";
   return 0;
 }
 

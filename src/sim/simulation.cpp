@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <sstream>
 
 #include "vesph/boundary/registry.hpp"
@@ -65,7 +66,7 @@ Simulation<D>::Simulation(Config& config, const SceneHeader& header) : config_(c
   std::vector<HydrostaticBlock<D>> hydrostatic_blocks;
   std::vector<BlockParticles> block_spans;
   wall_points_ = generateParticles(root, LatticeGeometry<D>{config.file(), dx_, rho0_, system_.domain, system_.kernel},
-                                   system_.particles, &hydrostatic_blocks, &block_spans);
+                                   system_.particles, &hydrostatic_blocks, &block_spans, &block_summaries_);
   // Walls, open boundaries (an inflow buffer of fixed particles, an outflow plane), domain exit.
   BoundaryBuild<D> boundaries{root, system_.particles, system_.domain, dx_, rho0_, system_.kernel.supportRadius(),
                               wall_points_, block_spans, {}, {}, {}};
@@ -253,6 +254,28 @@ std::string Simulation<D>::describe() const {
              : e->name() == "artificial_viscosity" ? " (equivalent viscosity alpha c h / (2 (D + 2)))"
                                                    : " (kinematic viscosity nu)")
          << "\n";
+  }
+  return os.str();
+}
+
+template <int D>
+std::string Simulation<D>::describeBlocks() const {
+  std::ostringstream os;
+  for (const BlockSummary& b : block_summaries_) {
+    os << "# " << b.path << ": " << b.kind << " " << b.shape << ", " << b.count << " particles, volume "
+       << b.volume << " m^" << D;
+    if (std::isfinite(b.reference_volume) && b.reference_volume > 0)
+    {
+      char diff[32];
+      std::snprintf(diff, sizeof diff, "%+.3f", 100.0 * (b.volume / b.reference_volume - 1.0));
+      os << " (the shape's " << b.reference_volume << ", " << diff << " %)";
+      // A Cartesian cut of a curved shape (a fluid disk or sphere, a hole subtracted from a
+      // box) coarser than about 10 dx in radius misses its volume by more than 1 %.
+      if (std::abs(b.volume / b.reference_volume - 1.0) > 0.01)
+        os << "; more than 1 % off: the lattice cut is too coarse for the shape (a smaller spacing, or rings: "
+              "shape = \"cylinder\")";
+    }
+    os << "\n";
   }
   return os.str();
 }

@@ -191,7 +191,9 @@ sed -e '/^\[effects.free_surface\]/d' "$WORK/drop.toml" > "$WORK/no_detection.to
 expect 2 "free_surface_mirror needs .*add \[effects.free_surface\]" -- "$VESPH" check "$WORK/no_detection.toml"
 expect 2 "threshold" -- "$VESPH" check "$WORK/drop.toml" --set 'effects.free_surface.threshold=1.5'
 expect 2 "inside the domain" -- "$VESPH" check "$WORK/drop.toml" --set 'blocks[0].centre=[0.0, 0.055]'
-expect 2 "overlaps.*bounding box" -- "$VESPH" check "$WORK/drop.toml" --set 'blocks[0].centre=[0.0, 0.0095]'
-expect 2 "\"box\" for a wall block" -- "$VESPH" check "$WORK/drop.toml" --set 'blocks[1].shape="disk"'
+# (blocks overlap when a particle lies inside another block's shape or two blocks' particles lie
+# closer than half a spacing; a disk wall needs its centre and diameter)
+expect 2 "blocks\[1\]: overlaps blocks\[0\]: a particle of blocks\[0\] at .* lies inside blocks\[1\]'s shape" -- "$VESPH" check "$WORK/drop.toml" --set 'blocks[0].centre=[0.0, 0.0095]'
+expect 2 "blocks\[1\].centre: expected" -- "$VESPH" check "$WORK/drop.toml" --set 'blocks[1].shape="disk"'
 expect 2 "diameter" -- "$VESPH" check "$WORK/drop.toml" --set 'blocks[0].diameter=-1.0'
 finish

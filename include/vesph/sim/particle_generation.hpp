@@ -36,16 +36,32 @@ struct HydrostaticBlock {
   std::string path;                      // for messages
 };
 
+// What `vesph check` reports per [[blocks]] table (scene order): its particle count and summed
+// particle volume sum m/rho0 against the shape's analytic volume less its subtractions
+// (docs/user-guide.md "[[blocks]]"; NaN where a subtraction cuts across the shape's surface and
+// no analytic value exists).
+struct BlockSummary {
+  std::string path;   // "blocks[k]"
+  std::string kind;   // "fluid" / "wall"
+  std::string shape;  // "box", "disk", "sphere", "cylinder", "tube"
+  std::size_t count = 0;
+  double volume = 0;            // m^D: sum over the block's particles of m / rho0
+  double reference_volume = 0;  // m^D: the analytic volume (NaN: unknown)
+};
+
 // Reads [[blocks]] (and [initial] velocity) and adds their particles to `particles` (ids from
 // 0). Returns per wall particle its treatment (image walls, pressure floors), or an empty list
 // when every wall is plain dummy layers. The fluid blocks marked hydrostatic go to
 // `hydrostatic` when given (otherwise the key is refused). `spans`, when given, receives per
-// [[blocks]] table (scene order) its particles (the moving walls' blocks).
+// [[blocks]] table (scene order) its particles (the moving walls' blocks); `summaries`, when
+// given, per block its count and volumes. Throws InputError when particles of two blocks lie
+// closer than half a spacing (the blocks overlap).
 template <int D>
 std::vector<WallPoint<D>> generateParticles(ConfigTable& root, const LatticeGeometry<D>& geometry,
                                             ParticleSet<D>& particles,
                                             std::vector<HydrostaticBlock<D>>* hydrostatic = nullptr,
-                                            std::vector<BlockParticles>* spans = nullptr);
+                                            std::vector<BlockParticles>* spans = nullptr,
+                                            std::vector<BlockSummary>* summaries = nullptr);
 
 // The hydrostatic initial density (docs/theory.md "Hydrostatic initial density"): each particle
 // of the blocks gets the density whose pressure is the hydrostatic one under the body

@@ -19,6 +19,7 @@
 #include "vesph/sim/checkpoint.hpp"
 #include "vesph/sim/gauges.hpp"
 #include "vesph/sim/ode_state.hpp"
+#include "vesph/sim/particle_generation.hpp"
 #include "vesph/sim/pressure_scheme.hpp"
 #include "vesph/sim/step_checks.hpp"
 #include "vesph/sim/system.hpp"
@@ -78,6 +79,9 @@ class Simulation {
   RunReport run(const RunOptions& options);
   // Human-readable facts about the built scene (particle counts, h, sound speed, limits).
   std::string describe() const;
+  // Per [[blocks]] table: its particle count and volume against the shape's (`vesph check`).
+  std::string describeBlocks() const;
+  const std::vector<BlockSummary>& blockSummaries() const { return block_summaries_; }
 
   SphSystem<D>& system() { return system_; }
   const SphSystem<D>& system() const { return system_; }
@@ -108,6 +112,7 @@ class Simulation {
   std::unique_ptr<Integrator> integrator_;
   std::string integrator_name_;
   std::vector<WallPoint<D>> wall_points_;  // per fixed particle: its wall treatment
+  std::vector<BlockSummary> block_summaries_;  // per [[blocks]] table: count and volume
   double dx_ = 0, rho0_ = 0, mu_ = 0, t_end_ = 0, skin_ = 0;
   std::vector<double> output_times_;
   StepChecks<D> checks_;
