@@ -296,9 +296,15 @@ def plot(png, P, uc, rows, profiles, stress, title):
     axes[1].plot(tt, [pipe_oldroyd_b_startup(0.0, x, P["g"], P["rho"], P["eta_s"], P["eta_p"], P["lam"], R) / uc
                       for x in tt], "k-", label="analytic, r = 0")
     axes[1].plot(ts, [row[4] for row in rows], "o", ms=3, label="vesph, innermost bin")
-    axes[1].plot(ts, [100 * row[1] for row in rows], "s", ms=3, label="binned error, % of u_c")
     axes[1].set_xlabel("t [s]")
-    axes[1].legend(fontsize="small")
+    axes[1].set_ylabel("u / u_c")
+    twin = axes[1].twinx()
+    twin.plot(ts, [100 * row[1] for row in rows], "rs", ms=3, label="binned error (right axis)")
+    twin.set_ylabel("binned error, % of u_c", color="r")
+    twin.set_ylim(0.0, max(3.5, 110 * max(row[1] for row in rows)))
+    handles = axes[1].get_legend_handles_labels()
+    extra = twin.get_legend_handles_labels()
+    axes[1].legend(handles[0] + extra[0], handles[1] + extra[1], fontsize="small", loc="center right")
     if stress:
         ax = axes[2]
         mr = stress["r"] / R
