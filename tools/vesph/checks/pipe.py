@@ -4,7 +4,8 @@ analytic Bessel-series solution (docs/validation.md §16).
 Usage
 -----
     tools/vesph-post pipe_check H5FILE [--times T ...] [--tolerance TOL]
-        [--stress-tolerance 0.03] [--interior 0.2] [--no-stresses] [--png OUT.png] [--csv OUT.csv]
+        [--stress-tolerance 0.03] [--interior 0.2] [--no-stresses] [--criterion profile|centreline]
+        [--png OUT.png] [--csv OUT.csv]
 
 The pipe comes from the resolved scene stored in the file: the fluid block of shape
 "cylinder" (centre, diameter = 2R, axis), the body force g = effects.body_force.acceleration
@@ -23,7 +24,9 @@ Checks (exit 0 when all pass, 1 otherwise):
    axis (bins one particle spacing wide); in each bin the mean axial velocity against the mean
    of the analytic velocity at the same particles; the largest difference over the bins,
    divided by u_c, below --tolerance (default 2 % for a Newtonian scene, 3 % for Oldroyd-B).
-   The largest single-particle difference is printed too (not asserted).
+   The largest single-particle difference is printed too (not asserted). With --criterion
+   centreline only the innermost bin's error is asserted (the plane channel's criterion of
+   docs/validation.md §6, the centreline velocity history); the profile's is still printed.
 2. Oldroyd-B only, unless --no-stresses: at the last frame (which must be steady: the analytic
    transient there below 0.1 % of u_c) the steady stresses over the bins inside
    r <= (1 - --interior) R: the total shear stress T_rz = -rho g r/2, the polymer part
@@ -142,6 +145,9 @@ def main(argv=None):
     ap.add_argument("--interior", type=float, default=0.2,
                     help="the stresses are compared at r <= (1 - INTERIOR) R (default 0.2)")
     ap.add_argument("--no-stresses", action="store_true", help="skip the steady-stress check")
+    ap.add_argument("--criterion", choices=("profile", "centreline"), default="profile",
+                    help="velocity acceptance: every bin (profile, default) or the innermost bin's "
+                         "history alone (centreline: the plane channel's criterion, validation.md §6)")
     ap.add_argument("--png")
     ap.add_argument("--csv")
     a = ap.parse_args(argv)
@@ -192,28 +198,31 @@ def check(a):
             err_max = float(np.max(np.abs(u - exact))) / uc
             centre = (float(us[0]), float(ue[0]))
             rows.append((t, float(err_bins.max()), float(mr[np.argmax(err_bins)]) / R, err_max,
-                         centre[0] / uc, centre[1] / uc))
+                         centre[0] / uc, centre[1] / uc, float(err_bins[0])))
             profiles.append((t, mr, us, ue))
             last = (k, t, fl, pos, r, er, u)
         print(f"{'t [s]':>9} {'binned err %':>12} {'at r/R':>7} {'particle err %':>14} "
-              f"{'u_axis/u_c sim':>14} {'analytic':>9}")
+              f"{'u_axis/u_c sim':>14} {'analytic':>9} {'axis err %':>10}")
         for row in rows:
             print(f"{row[0]:9.4g} {100 * row[1]:12.3f} {row[2]:7.3f} {100 * row[3]:14.3f} "
-                  f"{row[4]:14.4f} {row[5]:9.4f}")
+                  f"{row[4]:14.4f} {row[5]:9.4f} {100 * row[6]:10.3f}")
         ok = True
-        bad = [row for row in rows if not row[1] < tol]
+        column, what = (1, "binned velocity error") if a.criterion == "profile" else (6, "centreline (innermost bin) error")
+        bad = [row for row in rows if not row[column] < tol]
         if bad:
-            worst = max(bad, key=lambda row: row[1])
-            print(f"FAIL: binned velocity error above {100 * tol:g} % at {len(bad)} frame(s), worst "
-                  f"{100 * worst[1]:.3f} % at t = {worst[0]:g} s")
+            worst = max(bad, key=lambda row: row[column])
+            print(f"FAIL: {what} above {100 * tol:g} % at {len(bad)} frame(s), worst "
+                  f"{100 * worst[column]:.3f} % at t = {worst[0]:g} s")
             ok = False
+        else:
+            print(f"{what} below {100 * tol:g} % at every frame (worst {100 * max(row[column] for row in rows):.3f} %)")
         stress = None
         if viscoelastic and not a.no_stresses:
             stress, stress_ok = steady_stress_check(out, P, last, a)
             ok = ok and stress_ok
         if a.csv:
             with open(a.csv, "w") as fh:
-                fh.write("time_s,binned_error,worst_bin_r_over_R,particle_error,axis_sim,axis_exact\n")
+                fh.write("time_s,binned_error,worst_bin_r_over_R,particle_error,axis_sim,axis_exact,axis_error\n")
                 for row in rows:
                     fh.write(",".join(f"{v:.10g}" for v in row) + "\n")
             print(f"wrote {a.csv}")
