@@ -95,7 +95,7 @@ struct Solid {
 //  * cylinder, tube, and wall disks (2D): concentric rings, stacked along the axis in 3D
 //    (placeRings); wall spheres: concentric shells (placeShells). Each particle's mass is rho0
 //    times its ring's (shell's) cell volume, so the particles' volume is the shape's
-//    (docs/theory.md "Curved walls").
+//    (docs/theory.md §6.3).
 template <int D>
 struct Block {
   ParticleKind kind;
@@ -561,8 +561,7 @@ class LatticePlacer {
   // dr = (R - R_i)/n_r at radii r_k = R_i + (k + 1/2) dr, each with N_k = round(2 pi r_k / dx)
   // particles at equal angles (every other ring turned by half a step), in 3D stacked at
   // n_z = round(L/dx) stations dz = L/n_z apart along the axis. Mass rho0 * 2 pi r_k dr (dz) / N_k:
-  // the ring cells tile the shape, so the summed volume is the analytic one (docs/theory.md
-  // "Curved walls").
+  // the ring cells tile the shape, so the summed volume is the analytic one (docs/theory.md §6.3).
   void placeRings(const Block<D>& b) {
     const Solid<D>& s = b.solid;
     const double dx = g_.spacing, pi = std::numbers::pi;

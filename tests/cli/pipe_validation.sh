@@ -1,4 +1,4 @@
-# Validation: the Hagen-Poiseuille start-up in a 3D pipe (docs/validation.md §16) against the
+# Validation: the Hagen-Poiseuille start-up in a 3D pipe (docs/validation.md §17) against the
 # Bessel-series solutions (tools/vesph-post pipe_check), shortened to CI time: the Newtonian
 # pipe (cases/pipe_poiseuille_3d.toml, 20 across) to t = 0.05 s = 0.2 R^2/nu, the binned axial
 # velocity within 2 % of the steady centreline velocity at t = 0.01, 0.025 and 0.05 s; the
@@ -6,9 +6,9 @@
 # to t = 0.8 lambda = 0.1 s: its centreline velocity (the innermost bin) within 3 % at every frame
 # (t/lambda = 0.2, 0.4, 0.6, 0.8), the criterion of the plane channel (§6). The profile is printed,
 # not asserted: at 20 across its outermost ring misses the 3 % (3.4 % at 0.8 lambda; 30 across
-# meets it, 1.7 %, docs/validation.md §16). 86 s of CPU on the loaded development machine. The
+# meets it, 1.7 %, docs/validation.md §17). 86 s of CPU on the loaded development machine. The
 # full runs (the Newtonian to t = R^2/nu, the Oldroyd-B to t = 8 lambda with the steady stresses)
-# are the commands of docs/validation.md §16.
+# are the commands of docs/validation.md §17.
 . "$(dirname "$0")/lib.sh"
 POST="$SRC/tools/vesph-post"
 expect 0 "ok: finished" -- "$VESPH" run "$SRC/cases/pipe_poiseuille_3d.toml" -o "$WORK/newtonian" --quiet \

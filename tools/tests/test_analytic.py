@@ -1,6 +1,6 @@
 """Analytic solutions (vesph.analytic): Poiseuille start-up (t = 0, walls, steady and short-time
 limits, the PDE), plane Couette start-up (walls, steady limit, the PDE, the ramp against Duhamel's
-integral) and the XPP homogeneous-shear solver (small-rate limit = Oldroyd-B, Newton
+integral), steady circular Couette flow (wall speeds, the ODE) and the XPP homogeneous-shear solver (small-rate limit = Oldroyd-B, Newton
 and ODE routes agree, flow-curve inversion, channel velocity, the 1-D start-up)."""
 
 import numpy as np
@@ -160,5 +160,29 @@ def make_xpp_solver_tests(tmp):
     return T
 
 
+def make_circular_couette_tests(tmp):
+    """Steady circular Couette flow: the wall speeds, d/dr (1/r d(r v)/dr) = 0, solid-body
+    rotation when both cylinders turn together."""
+    T = Checks()
+    t = T.add
+    from vesph.analytic import circular_couette
+
+    @t
+    def circular_couette_walls_and_ode():
+        R1, R2 = 0.5e-3, 1.0e-3
+        for w1, w2 in ((4.0, 0.0), (0.0, -3.0), (2.0, 5.0)):
+            ends = circular_couette(np.array([R1, R2]), R1, R2, w1, w2)
+            expect(np.max(np.abs(ends - [w1 * R1, w2 * R2])) < 1e-15, f"wall speeds {ends} for {w1}, {w2}")
+            r, h = np.linspace(0.6e-3, 0.9e-3, 7), 1e-6
+            f = lambda x: (circular_couette(x + h, R1, R2, w1, w2) * (x + h)
+                           - circular_couette(x - h, R1, R2, w1, w2) * (x - h)) / (2 * h) / x
+            res = np.max(np.abs((f(r + h) - f(r - h)) / (2 * h))) / (max(abs(w1), abs(w2)) / R1)
+            expect(res < 1e-6, f"ODE residual {res:.2e}")
+        expect(abs(circular_couette(0.7e-3, R1, R2, 3.0, 3.0) - 3.0 * 0.7e-3) < 1e-18, "solid-body rotation")
+        expect(isinstance(circular_couette(0.7e-3, R1, R2, 3.0), float), "scalar gives a float")
+    return T
+
+
 # unittest collects the groups above through load_tests
-load_tests = load_tests_of(make_analytic_tests, make_couette_tests, make_xpp_solver_tests)
+load_tests = load_tests_of(make_analytic_tests, make_couette_tests, make_circular_couette_tests,
+                           make_xpp_solver_tests)

@@ -1,14 +1,18 @@
 """The validation checks against analytic solutions: poiseuille_check (exact profile, --times,
 CSV/PNG, perturbed velocity, mass drift, missing time, fixed-length strings) and
 xpp_steady_shear check (passes on the 1-D start-up, fails on a wrong tau_zz, an oscillating
-start-up, before the steady state, without an XPP)."""
+start-up, before the steady state, without an XPP) and circular_couette_check (the exact profile
+passes with its plot, a perturbed ring and a mass drift fail, a scene without a fluid tube is
+refused)."""
 import os
 import re
 
 import h5py
 
-from support import (U_CENTRE, Checks, expect, load_tests_of, read_text, tool, write_channel_case,
-                     write_xpp_channel)
+import numpy as np
+
+from support import (TOOLS, U_CENTRE, Checks, expect, load_tests_of, read_text, tool, write_channel_case,
+                     write_h5, write_xpp_channel)
 
 
 def make_poiseuille_tests(tmp):
@@ -137,5 +141,100 @@ def make_xpp_check_tests(tmp):
     return T
 
 
+CC_SCENE = """name = "cc"
+dimension = 2
+[fluid]
+density = 1000.0
+viscosity = 1.0e-3
+[[blocks]]
+kind = "fluid"
+shape = "tube"
+centre = [0.1, -0.2]
+inner_diameter = 1.0
+outer_diameter = 2.0
+[[blocks]]
+kind = "wall"
+shape = "cylinder"
+centre = [0.1, -0.2]
+diameter = 1.0
+angular_velocity = 4.0
+axis_point = [0.1, -0.2]
+[[blocks]]
+kind = "wall"
+shape = "tube"
+centre = [0.1, -0.2]
+inner_diameter = 2.0
+outer_diameter = 2.5
+"""
+
+
+def write_circular_couette(path, perturb=0.0, mass_drift=0.0, scene=CC_SCENE):
+    """Rings of fluid between R1 = 0.5 and R2 = 1 about (0.1, -0.2) moving with A r + B/r
+    (omega1 = 4, omega2 = 0), the third ring's speed times (1 + perturb); a few wall particles."""
+    from vesph.analytic import circular_couette
+    c = np.array([0.1, -0.2])
+    r = np.repeat(0.5 + (np.arange(20) + 0.5) * 0.025, 60)
+    th = np.tile(np.linspace(0, 2 * np.pi, 60, endpoint=False), 20)
+    x = c + np.column_stack([r * np.cos(th), r * np.sin(th)])
+    v = circular_couette(r, 0.5, 1.0, 4.0)[:, None] * np.column_stack([-np.sin(th), np.cos(th)])
+    v[120:180] *= 1 + perturb
+    xw = c + np.array([[0.4, 0.0], [1.1, 0.0]])
+    frames = []
+    for k, t in enumerate((0.0, 1.0)):
+        n = len(x)
+        frames.append({"time": t, "step": k, "position": np.vstack([x, xw]),
+                       "velocity": np.vstack([v if t > 0 else 0 * v, [[0.0, 1.6], [0.0, 0.0]]]),
+                       "kind": np.concatenate([np.zeros(n, np.uint8), np.ones(2, np.uint8)]),
+                       "mass": np.concatenate([np.full(n, 1.0 + (mass_drift if t > 0 else 0.0)), [1.0, 1.0]]),
+                       "id": np.arange(n + 2, dtype=np.uint64)})
+    write_h5(path, scene, 2, frames)
+    return path
+
+
+def post(*args):
+    """tools/vesph-post ARGS: (exit status, stdout, stderr)."""
+    import subprocess
+    p = subprocess.run(["sh", os.path.join(TOOLS, "vesph-post"), *map(str, args)], capture_output=True, text=True)
+    return p.returncode, p.stdout, p.stderr
+
+
+def make_circular_couette_tests(tmp):
+    T = Checks()
+    t = T.add
+
+    @t
+    def circular_couette_exact_profile_passes():
+        png = os.path.join(tmp, "cc.png")
+        rc, out, err = post("circular_couette_check",
+                            write_circular_couette(os.path.join(tmp, "cc.h5")), "--plot", png)
+        expect(rc == 0 and "RESULT: PASS" in out, f"exit {rc}", out + err)
+        expect(os.path.getsize(png) > 0, "no plot")
+
+    @t
+    def circular_couette_perturbed_ring_fails():
+        # the third ring (r = 0.5625, v = 1.62) 3 % too fast: 2.43 % of omega R1 = 2
+        rc, out, err = post("circular_couette_check",
+                            write_circular_couette(os.path.join(tmp, "cc_bad.h5"), perturb=0.03))
+        expect(rc == 1 and "azimuthal velocity error 2.43" in err, f"exit {rc}", out + err)
+        rc, out, err = post("circular_couette_check", os.path.join(tmp, "cc_bad.h5"),
+                            "--tolerance", "0.03")
+        expect(rc == 0, f"exit {rc} with a 3 % tolerance", out + err)
+
+    @t
+    def circular_couette_mass_drift_fails():
+        rc, out, err = post("circular_couette_check",
+                            write_circular_couette(os.path.join(tmp, "cc_mass.h5"), mass_drift=1e-9))
+        expect(rc == 1 and "mass drift" in err, f"exit {rc}", out + err)
+
+    @t
+    def circular_couette_needs_a_fluid_tube():
+        scene = CC_SCENE.replace('shape = "tube"\ncentre = [0.1, -0.2]\ninner_diameter = 1.0',
+                                 'shape = "disk"\ncentre = [0.1, -0.2]\ninner_diameter = 1.0', 1)
+        rc, out, err = post("circular_couette_check",
+                            write_circular_couette(os.path.join(tmp, "cc_disk.h5"), scene=scene))
+        expect(rc == 1 and "one fluid block of shape = \"tube\"" in err, f"exit {rc}", out + err)
+    return T
+
+
 # unittest collects the groups above through load_tests
-load_tests = load_tests_of(make_poiseuille_tests, make_xpp_check_tests)
+load_tests = load_tests_of(make_poiseuille_tests, make_xpp_check_tests, make_circular_couette_tests)

@@ -33,6 +33,7 @@ TOOL_MODULES = {
     "couette_check": "vesph.checks.couette",
     "pipe_check": "vesph.checks.pipe",
     "rotation_check": "vesph.checks.rotating_box",
+    "circular_couette_check": "vesph.checks.circular_couette",
     "hydrostatic_check": "vesph.measure.hydrostatic",
     "inflow_check": "vesph.measure.inflow",
     "drop_measure": "vesph.measure.drop",

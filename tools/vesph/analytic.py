@@ -3,6 +3,7 @@ docs/validation.md), in SI units:
 
 * analytic_velocity: transient plane Poiseuille flow from rest (Newtonian, series solution);
 * couette_startup: start-up of plane Couette flow, one wall set moving (Newtonian, series);
+* circular_couette: steady circular Couette flow between two rotating cylinders (Newtonian);
 * waters_king: Waters & King's start-up of Oldroyd-B channel flow (dimensionless);
 * pipe_newtonian_startup, pipe_oldroyd_b_startup, pipe_steady_stresses, pipe_startup_radial:
   Hagen-Poiseuille start-up in a pipe (Newtonian; Oldroyd-B after Waters & King, the pipe case;
@@ -74,6 +75,26 @@ def analytic_velocity(y, t, F, nu, H, y0=0.0):
             break
     out = steady - total
     return float(out[0]) if scalar else out
+
+
+# --------------------------------------------------------------- circular Couette (steady)
+def circular_couette(r, R1, R2, omega1, omega2=0.0):
+    """Steady azimuthal velocity [m/s] between an inner cylinder of radius R1 turning at omega1
+    and an outer one of radius R2 turning at omega2 (Newtonian, incompressible; the solution of
+    d/dr (1/r d(r v)/dr) = 0 with v(R1) = omega1 R1, v(R2) = omega2 R2):
+
+        v(r) = A r + B / r,  A = (omega2 R2^2 - omega1 R1^2) / (R2^2 - R1^2),
+                             B = (omega1 - omega2) R1^2 R2^2 / (R2^2 - R1^2).
+
+    r [m] (scalar or array), 0 < R1 < R2 [m], omega [rad/s]. Float for scalar r, else an array.
+    """
+    if not 0 < R1 < R2:
+        raise ValueError("circular_couette: 0 < R1 < R2")
+    A = (omega2 * R2 * R2 - omega1 * R1 * R1) / (R2 * R2 - R1 * R1)
+    B = (omega1 - omega2) * R1 * R1 * R2 * R2 / (R2 * R2 - R1 * R1)
+    r = np.asarray(r, dtype=np.float64)
+    out = A * r + B / r
+    return float(out) if out.ndim == 0 else out
 
 
 # --------------------------------------------------------------- plane Couette start-up
@@ -193,7 +214,7 @@ PIPE_MODES = 4000   # Bessel modes summed: the velocity series' tail is below 1e
 @functools.lru_cache(maxsize=None)
 def pipe_modes(n=PIPE_MODES):
     """(j, c): the first n zeros j_k of J0 and the coefficients c_k = 8/(j_k^3 J1(j_k)) of the
-    Fourier-Bessel series 1 - x^2 = sum_k c_k J0(j_k x) on 0 <= x <= 1 (docs/validation.md §16: the
+    Fourier-Bessel series 1 - x^2 = sum_k c_k J0(j_k x) on 0 <= x <= 1 (docs/validation.md §17: the
     steady Hagen-Poiseuille profile; from int_0^1 x (1 - x^2) J0(j x) dx = 4 J1(j)/j^3 and the
     norm int_0^1 x J0(j x)^2 dx = J1(j)^2/2). Read-only arrays."""
     j = special.jn_zeros(0, n)

@@ -1,13 +1,15 @@
 #!/usr/bin/python3
 """Checks of the moving walls (docs/validation.md §15) against analytic solutions.
 
-The tools are vesph.checks.couette and vesph.checks.rotating_box (this module holds both).
+The tools are vesph.checks.couette, vesph.checks.rotating_box and
+vesph.checks.circular_couette (this module holds all three).
 
 Usage
 -----
     tools/vesph-post couette_check H5FILE [--times T ...] [--tolerance 0.01]
     tools/vesph-post rotation_check H5FILE [--time T] [--tolerance 0.001]
         [--early-time T0] [--early-minimum 0.3] [--decay T1 T2] [--decay-tolerance 0.1]
+    tools/vesph-post circular_couette_check H5FILE [--time T] [--tolerance 0.01] [--bins 10] [--plot PNG]
 
 couette_check: start-up of plane Couette flow (cases/couette_startup.toml). From the resolved
 scene: nu = fluid.viscosity / fluid.density; the moving wall is the wall block with a velocity,
@@ -33,6 +35,23 @@ solid-body rotation v = omega x (x - c). For each frame: deviation = max over fl
     within --decay-tolerance (relative, default 10 %) with the slowest Stokes mode of the
     square, 52.3447 nu / L^2 (the first eigenvalue of the clamped plate on the unit square).
 
+circular_couette_check: steady circular Couette flow (cases/circular_couette.toml, 2D). The
+fluid block is a tube (centre c, inner_diameter 2 R1, outer_diameter 2 R2); the wall blocks
+inside R1 and outside R2 turn at omega1 and omega2 about c (angular_velocity, axis_point; a
+wall without one is at rest). The steady azimuthal velocity (Newtonian, any Re: the flow is
+circular, the pressure takes the centripetal part):
+
+    v(r) = A r + B / r,  A = (omega2 R2^2 - omega1 R1^2) / (R2^2 - R1^2),
+                         B = (omega1 - omega2) R1^2 R2^2 / (R2^2 - R1^2)
+
+                                                     (vesph.analytic.circular_couette)
+
+For the frame at --time (default: the last): error = max over fluid particles of
+|v_theta - v(r)| / S, S = max(|omega1| R1, |omega2| R2) the faster wall's speed; the radial
+velocity max |v_r| / S; a table of the mean v_theta in --bins radial bins against v at the
+bin's mean radius. Pass: error < tolerance (default 1 %) and the fluid mass unchanged. --plot
+writes the binned profile against v(r) (matplotlib).
+
 Exit status 0 pass, 1 fail, 2 usage.
 """
 
@@ -42,7 +61,7 @@ import sys
 
 import numpy as np
 
-from vesph.analytic import couette_startup
+from vesph.analytic import circular_couette, couette_startup
 from vesph.output import Output, ToolError
 
 MASS_DRIFT_LIMIT = 1e-12
@@ -237,6 +256,138 @@ def rotation(path, time=None, tolerance=0.001, early_time=0.01, early_minimum=0.
         print(f"FAIL: {p}", file=err)
     print("RESULT: " + ("FAIL" if problems else "PASS"), file=out)
     return 1 if problems else 0
+
+
+def _circular_setup(scene):
+    if int(scene.get("dimension", 2)) != 2:
+        raise ValueError("circular_couette_check is for 2D scenes")
+    fluid = _fluid_blocks(scene)
+    if len(fluid) != 1 or fluid[0].get("shape") != "tube":
+        raise ValueError("expected one fluid block of shape = \"tube\" (the gap)")
+    centre = np.array([float(c) for c in fluid[0]["centre"]])
+    R1 = 0.5 * float(fluid[0]["inner_diameter"])
+    R2 = 0.5 * float(fluid[0]["outer_diameter"])
+    omega1 = omega2 = 0.0
+    for b in scene.get("blocks", []):
+        if b.get("kind") != "wall" or "angular_velocity" not in b:
+            continue
+        if "velocity" in b or float(b.get("ramp_time", 0.0)) > 0:
+            raise ValueError(f"{b.get('shape', 'box')} wall: no translation or ramp in the steady check")
+        if np.abs(np.array([float(c) for c in b["axis_point"]]) - centre).max() > 1e-9 * R2:
+            raise ValueError("a wall turns about a point other than the gap's centre")
+        # Which cylinder: a wall block reaching inside R1 is the inner one.
+        if b.get("shape") in ("cylinder", "disk"):
+            inner = 0.5 * float(b["diameter"]) <= R1 * (1 + 1e-9)
+        elif b.get("shape") == "tube":
+            inner = 0.5 * float(b["outer_diameter"]) <= R1 * (1 + 1e-9)
+        else:
+            raise ValueError("rotating walls must be disks, cylinders or tubes about the gap's centre")
+        if inner:
+            omega1 = float(b["angular_velocity"])
+        else:
+            omega2 = float(b["angular_velocity"])
+    if omega1 == 0 and omega2 == 0:
+        raise ValueError("no rotating wall (angular_velocity) about the gap")
+    return centre, R1, R2, omega1, omega2
+
+
+def circular(path, time=None, tolerance=0.01, bins=10, plot=None, out=sys.stdout, err=sys.stderr):
+    try:
+        h5 = Output(path)
+    except ToolError as e:
+        print(f"FAIL: {e}", file=err)
+        return 1
+    problems = []
+    with h5:
+        try:
+            centre, R1, R2, omega1, omega2 = _circular_setup(h5.scene)
+        except (ValueError, KeyError, TypeError) as e:
+            print(f"FAIL: {path}: {e}", file=err)
+            return 1
+        frames = list(h5.frames)
+        times = np.array([t for _, t in frames])
+        k = len(frames) - 1 if time is None else int(np.argmin(np.abs(times - time)))
+        if time is not None and abs(times[k] - time) > 1e-6 * max(abs(time), 1e-300):
+            print(f"FAIL: no frame at t = {time:.9g} s (closest {times[k]:.9g} s)", file=err)
+            return 1
+        name, t = frames[k]
+        m0 = _mass(h5.read(0, ("kind", "mass")))
+        g = h5.read(k, ("kind", "position", "velocity", "mass"))
+        fl = g["kind"] == 0
+        d = g["position"][fl] - centre
+        r = np.hypot(d[:, 0], d[:, 1])
+        er, et = d / r[:, None], np.stack([-d[:, 1], d[:, 0]], axis=1) / r[:, None]
+        v = g["velocity"][fl]
+        vt, vr = np.sum(v * et, axis=1), np.sum(v * er, axis=1)
+        exact = circular_couette(r, R1, R2, omega1, omega2)
+        S = max(abs(omega1) * R1, abs(omega2) * R2)
+        e = float(np.max(np.abs(vt - exact))) / S
+        radial = float(np.max(np.abs(vr))) / S
+        drift = (_mass(g) - m0) / m0
+        print(f"file: {path}\nR1 = {R1:.6g} m  R2 = {R2:.6g} m  omega1 = {omega1:.6g} rad/s  omega2 = {omega2:.6g} rad/s"
+              f"  wall speed S = {S:.6g} m/s  frame {name} (t = {t:.6g} s), {int(fl.sum())} fluid particles", file=out)
+        edges = np.linspace(R1, R2, bins + 1)
+        which = np.clip(np.searchsorted(edges, r) - 1, 0, bins - 1)
+        print(f"{'r [m]':>12} {'n':>6} {'mean v_theta':>14} {'A r + B/r':>12} {'diff [% S]':>11}", file=out)
+        rows = []
+        for b in range(bins):
+            sel = which == b
+            if not sel.any():
+                continue
+            rb = float(r[sel].mean())
+            mean = float(vt[sel].mean())
+            ref = float(circular_couette(rb, R1, R2, omega1, omega2))
+            rows.append((rb, mean, ref))
+            print(f"{rb:12.6g} {int(sel.sum()):6d} {mean:14.6g} {ref:12.6g} {100 * (mean - ref) / S:11.4f}", file=out)
+        print(f"max |v_theta - (A r + B/r)| = {100 * e:.4g} % of S (pass below {100 * tolerance:g} %); "
+              f"max |v_r| = {100 * radial:.4g} % of S; mass drift {drift:.2e}", file=out)
+        if not e < tolerance:
+            problems.append(f"azimuthal velocity error {100 * e:.4g} % >= {100 * tolerance:g} % of the wall speed")
+        if not abs(drift) < MASS_DRIFT_LIMIT:
+            problems.append(f"mass drift {drift:.3e}")
+        if plot:
+            import matplotlib
+            matplotlib.use("Agg")
+            import matplotlib.pyplot as plt
+            fig, (ax, bx) = plt.subplots(1, 2, figsize=(10, 4))
+            rr = np.linspace(R1, R2, 200)
+            ax.plot(rr / R1, circular_couette(rr, R1, R2, omega1, omega2) / S, "k-", label="A r + B/r")
+            ax.plot(r / R1, vt / S, ".", ms=1.5, alpha=0.3, color="tab:blue", label="particles")
+            ax.plot([q[0] / R1 for q in rows], [q[1] / S for q in rows], "o", mfc="none", color="tab:red",
+                    label=f"mean in {bins} bins")
+            ax.set_xlabel("r / R1")
+            ax.set_ylabel("v_theta / S")
+            ax.set_title(f"circular Couette, t = {t:g} s")
+            ax.legend()
+            bx.axhspan(-100 * tolerance, 100 * tolerance, color="0.9", label=f"tolerance {100 * tolerance:g} %")
+            bx.plot(r / R1, 100 * (vt - exact) / S, ".", ms=1.5, alpha=0.4, color="tab:blue", label="particles")
+            bx.plot([q[0] / R1 for q in rows], [100 * (q[1] - q[2]) / S for q in rows], "o-", mfc="none",
+                    color="tab:red", label="bin means")
+            bx.set_xlabel("r / R1")
+            bx.set_ylabel("(v_theta - (A r + B/r)) / S  [%]")
+            bx.set_title(f"error: max {100 * e:.2g} % of S")
+            bx.legend()
+            fig.tight_layout()
+            fig.savefig(plot, dpi=120)
+            print(f"plot: {plot}", file=out)
+    for p in problems:
+        print(f"FAIL: {p}", file=err)
+    print("RESULT: " + ("FAIL" if problems else "PASS"), file=out)
+    return 1 if problems else 0
+
+
+def circular_main(argv=None):
+    ap = argparse.ArgumentParser(prog="circular_couette_check",
+                                 description="Steady circular Couette flow against v = A r + B/r.")
+    ap.add_argument("h5file", metavar="H5FILE")
+    ap.add_argument("--time", type=float, help="time of the checked frame, s (default: the last frame)")
+    ap.add_argument("--tolerance", type=float, default=0.01, help="fraction of the wall speed (default 0.01)")
+    ap.add_argument("--bins", type=int, default=10, help="radial bins of the printed profile (default 10)")
+    ap.add_argument("--plot", metavar="PNG", help="write the profile against the analytic one")
+    a = ap.parse_args(argv)
+    if a.bins < 1:
+        ap.error("--bins must be at least 1")
+    return circular(a.h5file, a.time, a.tolerance, a.bins, a.plot)
 
 
 def couette_main(argv=None):

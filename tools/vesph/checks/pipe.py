@@ -1,5 +1,5 @@
 """Check a vesph Hagen-Poiseuille start-up in a pipe (3D; Newtonian or Oldroyd-B) against the
-analytic Bessel-series solution (docs/validation.md §16).
+analytic Bessel-series solution (docs/validation.md §17).
 
 Usage
 -----
