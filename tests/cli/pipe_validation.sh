@@ -6,7 +6,7 @@
 # to t = 0.8 lambda = 0.1 s: its centreline velocity (the innermost bin) within 3 % at every frame
 # (t/lambda = 0.2, 0.4, 0.6, 0.8), the criterion of the plane channel (§6). The profile is printed,
 # not asserted: at 20 across its outermost ring misses the 3 % (3.4 % at 0.8 lambda; 30 across
-# meets it, 1.7 %, docs/validation.md §17). 86 s of CPU on the loaded development machine. The
+# meets it, 1.7 %, docs/validation.md §17). About 56 s on one core (44 s + 9 s + the checks). The
 # full runs (the Newtonian to t = R^2/nu, the Oldroyd-B to t = 8 lambda with the steady stresses)
 # are the commands of docs/validation.md §17.
 . "$(dirname "$0")/lib.sh"
