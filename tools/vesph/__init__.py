@@ -7,7 +7,8 @@ Modules
     catalogue    `vesph list --json`: what the vesph binary provides
     kernels      the SPH kernels, tabulated by the C++ (via the catalogue)
     limits       the explicit step limits with the C++ default coefficients
-    analytic     Poiseuille start-up, Waters & King, second-order fluid channel, XPP shear
+    analytic     Poiseuille start-up (channel and pipe), Waters & King (channel and pipe),
+                 second-order fluid channel, XPP shear
     checks.*     validation checks against analytic solutions, the output format checker
     measure.*    drop impact, die swell, channel profiles, inflow, hydrostatic tank, dam-break front,
                  plane sections of 3D runs
@@ -31,6 +32,7 @@ TOOL_MODULES = {
     "second_order_channel_check": "vesph.checks.second_order_channel",
     "xpp_steady_shear": "vesph.checks.xpp_shear",
     "couette_check": "vesph.checks.couette",
+    "pipe_check": "vesph.checks.pipe",
     "rotation_check": "vesph.checks.rotating_box",
     "circular_couette_check": "vesph.checks.circular_couette",
     "hydrostatic_check": "vesph.measure.hydrostatic",

@@ -5,14 +5,18 @@ docs/validation.md), in SI units:
 * couette_startup: start-up of plane Couette flow, one wall set moving (Newtonian, series);
 * circular_couette: steady circular Couette flow between two rotating cylinders (Newtonian);
 * waters_king: Waters & King's start-up of Oldroyd-B channel flow (dimensionless);
+* pipe_newtonian_startup, pipe_oldroyd_b_startup, pipe_steady_stresses, pipe_startup_radial:
+  Hagen-Poiseuille start-up in a pipe (Newtonian; Oldroyd-B after Waters & King, the pipe case;
+  the steady stresses; a method-of-lines solution of the radial equations to check them);
 * coefficients, steady_stresses, startup_velocity: the second-order fluid in channel flow;
 * Xpp, steady_shear, steady_shear_ode, channel_reference, startup_1d: the extended Pom-Pom
   (XPP) model in steady homogeneous shear and its channel flow.
 """
+import functools
 import math
 
 import numpy as np
-from scipy import integrate, interpolate, optimize
+from scipy import integrate, interpolate, optimize, special
 
 
 # ------------------------------------------------------------------ plane Poiseuille start-up
@@ -148,8 +152,14 @@ def couette_startup(s, t, U, nu, H, ramp_time=0.0):
 
 
 # ------------------------------------------------------- Oldroyd-B start-up (Waters & King)
-def mode_amplitude(T, E, beta, N):
-    alpha = E * N * N / 4.0
+def startup_mode(T, alpha, beta):
+    """Time function A(T) of one mode of the Oldroyd-B start-up (Waters & King 1970), T = t/lambda:
+    the solution of A'' + (1 + beta alpha) A' + alpha A = 0 with A(0) = 1, A'(0) = -alpha.
+    alpha = lambda nu0 k^2 for the mode's wavenumber k (nu0 = (eta_s + eta_p)/rho), beta =
+    eta_s/(eta_s + eta_p). With b = (1 + beta alpha)/2, d = b^2 - alpha:
+        d > 0: A = e^{-bT} [cosh cT + (b - alpha)/c sinh cT],  c = sqrt(d)
+        d < 0: A = e^{-bT} [cos cT + (b - alpha)/c sin cT],    c = sqrt(-d)
+        d = 0: A = e^{-bT} [1 + (b - alpha) T]."""
     b = 0.5 * (1.0 + beta * alpha)
     d = b * b - alpha
     if d > 0:
@@ -161,6 +171,26 @@ def mode_amplitude(T, E, beta, N):
         c = math.sqrt(-d)
         return np.exp(-b * T) * (np.cos(c * T) + (b - alpha) / c * np.sin(c * T))
     return np.exp(-b * T) * (1 + (b - alpha) * T)
+
+
+def startup_mode_rate(T, alpha, beta):
+    """dA/dT of startup_mode (the same branches)."""
+    b = 0.5 * (1.0 + beta * alpha)
+    d = b * b - alpha
+    if d > 0:
+        c = math.sqrt(d)
+        g = (b - alpha) / c
+        return 0.5 * (1 + g) * (c - b) * np.exp((c - b) * T) - 0.5 * (1 - g) * (b + c) * np.exp(-(b + c) * T)
+    if d < 0:
+        c = math.sqrt(-d)
+        h = (b - alpha) / c
+        return np.exp(-b * T) * ((h * c - b) * np.cos(c * T) - (b * h + c) * np.sin(c * T))
+    return np.exp(-b * T) * ((b - alpha) - b * (1 + (b - alpha) * T))
+
+
+def mode_amplitude(T, E, beta, N):
+    """The channel's mode N (= (2k - 1) pi): startup_mode with alpha = E N^2/4."""
+    return startup_mode(T, E * N * N / 4.0, beta)
 
 
 def waters_king(Y, T, E, beta, kmax=400):
@@ -175,6 +205,138 @@ def waters_king(Y, T, E, beta, kmax=400):
         if abs(48.0 / N ** 3 * A) < 1e-14:
             break
     return u
+
+
+# ----------------------------------------------------- Hagen-Poiseuille start-up in a pipe
+PIPE_MODES = 4000   # Bessel modes summed: the velocity series' tail is below 1e-8 of u_c
+
+
+@functools.lru_cache(maxsize=None)
+def pipe_modes(n=PIPE_MODES):
+    """(j, c): the first n zeros j_k of J0 and the coefficients c_k = 8/(j_k^3 J1(j_k)) of the
+    Fourier-Bessel series 1 - x^2 = sum_k c_k J0(j_k x) on 0 <= x <= 1 (docs/validation.md §17: the
+    steady Hagen-Poiseuille profile; from int_0^1 x (1 - x^2) J0(j x) dx = 4 J1(j)/j^3 and the
+    norm int_0^1 x J0(j x)^2 dx = J1(j)^2/2). Read-only arrays."""
+    j = special.jn_zeros(0, n)
+    c = 8.0 / (j ** 3 * special.j1(j))
+    j.setflags(write=False)
+    c.setflags(write=False)
+    return j, c
+
+
+def _pipe_series(r, R, time_functions):
+    """(1 - x^2) - sum_k c_k J0(j_k x) A_k, x = r/R, for the mode time functions A_k
+    (an array over the PIPE_MODES modes), in blocks of 500 modes."""
+    x = np.asarray(r, dtype=np.float64) / R
+    scalar = x.ndim == 0
+    x = np.atleast_1d(x)
+    j, c = pipe_modes()
+    out = 1.0 - x * x
+    for k0 in range(0, len(j), 500):
+        sl = slice(k0, k0 + 500)
+        w = c[sl] * time_functions[sl]
+        if not np.any(w):
+            break
+        out = out - special.j0(np.outer(x, j[sl])) @ w
+    return float(out[0]) if scalar else out
+
+
+def pipe_newtonian_startup(r, t, g, nu, R):
+    """Hagen-Poiseuille start-up of a Newtonian fluid [m/s]: at rest at t = 0 in a pipe of
+    radius R with no slip at r = R, driven by the body acceleration g along the axis:
+        u(r, t) = (g R^2/(4 nu)) [(1 - r^2/R^2) - sum_k c_k J0(j_k r/R) exp(-nu j_k^2 t/R^2)]
+    (j_k the zeros of J0, c_k = 8/(j_k^3 J1(j_k)): pipe_modes; the sum cancels the steady
+    profile at t = 0; its k-th term is 2 g R^2/(nu j_k^3 J1(j_k)) J0 e^{...}). r: radius(es) [m],
+    t >= 0 [s], g [m/s^2], nu [m^2/s], R [m]. At t = 0 the exact initial state (0) is returned.
+    Float for scalar r, else an array shaped like r."""
+    if t < 0 or nu <= 0 or R <= 0:
+        raise ValueError("pipe_newtonian_startup: t >= 0, nu > 0 and R > 0")
+    if t == 0:
+        return 0.0 if np.ndim(r) == 0 else np.zeros(np.shape(r))
+    j, _ = pipe_modes()
+    return g * R * R / (4.0 * nu) * _pipe_series(r, R, np.exp(-nu * j * j * t / (R * R)))
+
+
+def pipe_oldroyd_b_startup(r, t, g, rho, eta_s, eta_p, lam, R):
+    """Hagen-Poiseuille start-up of an Oldroyd-B fluid [m/s] (Waters & King 1970, the pipe):
+    fluid and stress at rest at t = 0, no slip at r = R, body acceleration g along the axis.
+    rho du/dt = rho g + (1/r) d(r T_rz)/dr, T_rz = eta_s du/dr + tau_rz and
+    tau_rz + lam dtau_rz/dt = eta_p du/dr (the upper-convected terms vanish for tau_rz since
+    tau_rr = 0); with u = u_s + sum_k a_k(t) J0(j_k r/R) and tau_rz likewise in J1, each mode obeys
+        lam a'' + (1 + lam nu_s k^2) a' + nu0 k^2 a = 0,   k = j_k/R,
+    a(0) = -u_c c_k (cancels the steady profile), a'(0) = nu0 k^2 u_c c_k (the initial
+    acceleration is g: the stress starts at zero). In T = t/lam: startup_mode with
+    alpha_k = lam nu0 j_k^2/R^2 and beta = eta_s/eta0; so
+        u(r, t) = u_c [(1 - r^2/R^2) - sum_k c_k J0(j_k r/R) A_k(t/lam)],  u_c = g R^2/(4 nu0),
+    eta0 = eta_s + eta_p, nu0 = eta0/rho, nu_s = eta_s/rho. eta_p = 0 (or lam = 0) is the
+    Newtonian start-up. Float for scalar r, else an array shaped like r."""
+    if t < 0 or rho <= 0 or R <= 0 or eta_s < 0 or eta_p < 0 or eta_s + eta_p <= 0 or lam < 0:
+        raise ValueError("pipe_oldroyd_b_startup: t >= 0, rho > 0, R > 0, eta_s, eta_p, lam >= 0")
+    eta0 = eta_s + eta_p
+    if eta_p == 0 or lam == 0:
+        return pipe_newtonian_startup(r, t, g, eta0 / rho, R)
+    if t == 0:
+        return 0.0 if np.ndim(r) == 0 else np.zeros(np.shape(r))
+    j, _ = pipe_modes()
+    nu0 = eta0 / rho
+    alpha = lam * nu0 * j * j / (R * R)
+    A = np.array([startup_mode(t / lam, a, eta_s / eta0) for a in alpha])
+    return g * R * R / (4.0 * nu0) * _pipe_series(r, R, A)
+
+
+def pipe_steady_stresses(r, g, rho, eta_s, eta_p, lam):
+    """The steady Hagen-Poiseuille stresses of an Oldroyd-B fluid at radii r [m] (Pa), as a dict:
+    du/dr = -g r/(2 nu0); the total shear stress T_rz = eta0 du/dr = -rho g r/2 (the force
+    balance, whatever the fluid), split into the solvent part eta_s du/dr and the polymer part
+    tau_rz = eta_p du/dr; the first normal-stress difference (polymer only)
+    N1 = tau_zz - tau_rr = 2 lam eta_p (du/dr)^2 (tau_rr = 0). z: the axis, r: outwards."""
+    r = np.asarray(r, dtype=np.float64)
+    eta0 = eta_s + eta_p
+    dudr = -g * rho * r / (2.0 * eta0)
+    return {"dudr": dudr, "T_rz": eta0 * dudr, "solvent_rz": eta_s * dudr,
+            "tau_rz": eta_p * dudr, "N1": 2.0 * lam * eta_p * dudr * dudr}
+
+
+def pipe_startup_radial(g, rho, eta_s, eta_p, lam, R, times, n=200):
+    """The same start-up solved directly (to check the series): the radial equations
+        rho du/dt = rho g + (1/r) d(r (eta_s du/dr + tau_rz))/dr,
+        dtau_rz/dt = (eta_p du/dr - tau_rz)/lam,
+        dtau_zz/dt = 2 (du/dr) tau_rz - tau_zz/lam          (upper-convected; tau_rr = 0)
+    by the method of lines: u at n cell centres r_i = (i + 1/2) R/n, the rate and the stresses
+    at the cell faces (no flux through r = 0; no slip at r = R by the mirrored ghost value),
+    LSODA (rtol 1e-9). lam = 0 or eta_p = 0: Newtonian (no stress equations; the stresses are
+    returned as zero). Returns (r_cells, u[times, n], r_faces (1..n), tau_rz[times, n],
+    tau_zz[times, n])."""
+    dr = R / n
+    rc = dr * (np.arange(n) + 0.5)
+    rf = dr * np.arange(1, n + 1)        # faces 1..n (face n is the wall)
+    viscoelastic = eta_p > 0 and lam > 0
+    eta_solvent = eta_s if viscoelastic else eta_s + eta_p
+
+    def rhs(t, z):
+        u = z[:n]
+        gdot = np.diff(np.concatenate([u, [-u[-1]]])) / dr       # at faces 1..n
+        flux = rf * eta_solvent * gdot
+        if viscoelastic:
+            trz, tzz = z[n:2 * n], z[2 * n:]
+            flux = flux + rf * trz
+        du = g + np.diff(np.concatenate([[0.0], flux])) / (rho * rc * dr)
+        if not viscoelastic:
+            return du
+        return np.concatenate([du, (eta_p * gdot - trz) / lam, 2.0 * gdot * trz - tzz / lam])
+
+    times = np.asarray(times, dtype=float)
+    size = 3 * n if viscoelastic else n
+    scale_u = g * R * R / (4.0 * (eta_s + eta_p) / rho)
+    sol = integrate.solve_ivp(rhs, (0.0, float(times[-1])), np.zeros(size), method="LSODA",
+                              t_eval=times, rtol=1e-9, atol=1e-13 * max(scale_u, rho * abs(g) * R))
+    if not sol.success:
+        raise RuntimeError("pipe start-up (method of lines): " + sol.message)
+    u = sol.y[:n].T
+    if viscoelastic:
+        return rc, u, rf, sol.y[n:2 * n].T, sol.y[2 * n:].T
+    zero = np.zeros_like(u)
+    return rc, u, rf, zero, zero
 
 
 # ---------------------------------------------------- second-order fluid in a channel
