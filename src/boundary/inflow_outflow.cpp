@@ -78,39 +78,8 @@ std::unique_ptr<InflowOutflow<D>> InflowOutflow<D>::fromConfig(ConfigTable& root
           in.fail("radius", os.str());
         }
       hook->placeNozzle(p, lo, hi, n, dx, rho0, next_id);
-    }
-    int across = D == 2 ? 1 - ax : -1;
-    double width = 0;  // of the parabolic profile
-    if (hook->nozzle_radius_ > 0) {
-      // placed above
-    } else if (hook->profile_ == "parabolic") {
-      if (D == 3 || in.has("profile_axis"))
-        across = static_cast<int>(in.integer("profile_axis", D == 2 ? std::optional<long long>(1 - ax) : std::nullopt, 0, D - 1));
-      if (across == ax) in.fail("profile_axis", "an axis across the flow direction (not the flow axis)");
-      width = hi[across] - lo[across];
-    }
-    // The buffer particles: cell centres of the box, as for blocks (fixed, kind inflow).
-    long total = 1;
-    for (int a = 0; a < D; ++a) total *= n[a];
-    const double mass = rho0 * std::pow(dx, D);
-    for (long k = 0; k < (hook->nozzle_radius_ > 0 ? 0 : total); ++k) {
-      long rem = k;
-      Vec<D> x;
-      for (int a = 0; a < D; ++a) {
-        x[a] = lo[a] + (static_cast<double>(rem % n[a]) + 0.5) * dx;
-        rem /= n[a];
-      }
-      double u = hook->extrapolated_ ? 0.0 : hook->mean_velocity_;
-      if (hook->profile_ == "parabolic") {
-        const double eta = (x[across] - lo[across]) / width;
-        u = 6.0 * hook->mean_velocity_ * eta * (1.0 - eta);
-      }
-      Vec<D> v = Vec<D>::Zero();
-      v[ax] = hook->sign_ * u * hook->rampFactor(0.0);
-      hook->buffer_.push_back(p.nFixed());
-      hook->speed_.push_back(u);
-      hook->lane_.push_back(hook->laneOf(x));
-      p.add(x, v, rho0, mass, ParticleKind::inflow, next_id++);
+    } else {
+      hook->placeBox(p, in, lo, hi, n, dx, rho0, next_id);
     }
   }
   if (outflow) {
@@ -141,6 +110,43 @@ std::unique_ptr<InflowOutflow<D>> InflowOutflow<D>::fromConfig(ConfigTable& root
   }
   hook->fluid_count_ = p.n_moving;
   return hook;
+}
+
+template <int D>
+void InflowOutflow<D>::placeBox(ParticleSet<D>& p, ConfigTable& in, const Vec<D>& lo, const Vec<D>& hi,
+                                const std::array<long, D>& n, double dx, double rho0, std::uint64_t& next_id) {
+  // The buffer particles: cell centres of the box, as for blocks (fixed, kind inflow).
+  const int ax = axis_;
+  int across = D == 2 ? 1 - ax : -1;
+  double width = 0;  // of the parabolic profile
+  if (profile_ == "parabolic") {
+    if (D == 3 || in.has("profile_axis"))
+      across = static_cast<int>(in.integer("profile_axis", D == 2 ? std::optional<long long>(1 - ax) : std::nullopt, 0, D - 1));
+    if (across == ax) in.fail("profile_axis", "an axis across the flow direction (not the flow axis)");
+    width = hi[across] - lo[across];
+  }
+  long total = 1;
+  for (int a = 0; a < D; ++a) total *= n[a];
+  const double mass = rho0 * std::pow(dx, D);
+  for (long k = 0; k < total; ++k) {
+    long rem = k;
+    Vec<D> x;
+    for (int a = 0; a < D; ++a) {
+      x[a] = lo[a] + (static_cast<double>(rem % n[a]) + 0.5) * dx;
+      rem /= n[a];
+    }
+    double u = extrapolated_ ? 0.0 : mean_velocity_;
+    if (profile_ == "parabolic") {
+      const double eta = (x[across] - lo[across]) / width;
+      u = 6.0 * mean_velocity_ * eta * (1.0 - eta);
+    }
+    Vec<D> v = Vec<D>::Zero();
+    v[ax] = sign_ * u * rampFactor(0.0);
+    buffer_.push_back(p.nFixed());
+    speed_.push_back(u);
+    lane_.push_back(laneOf(x));
+    p.add(x, v, rho0, mass, ParticleKind::inflow, next_id++);
+  }
 }
 
 template <int D>

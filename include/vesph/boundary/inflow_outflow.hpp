@@ -100,7 +100,10 @@ class InflowOutflow final : public StepHook<D> {
   double rampIntegral(double t) const;
 
  private:
-  // The circular nozzle's buffer particles (radius nozzle_radius_; fromConfig).
+  // The buffer particles of fromConfig: the box's lattice (its profile across profile_axis), or
+  // the circular nozzle's rings (radius nozzle_radius_).
+  void placeBox(ParticleSet<D>& p, ConfigTable& in, const Vec<D>& lo, const Vec<D>& hi, const std::array<long, D>& n,
+                double dx, double rho0, std::uint64_t& next_id);
   void placeNozzle(ParticleSet<D>& p, const Vec<D>& lo, const Vec<D>& hi, const std::array<long, D>& n, double dx,
                    double rho0, std::uint64_t& next_id);
   // Inflow.
