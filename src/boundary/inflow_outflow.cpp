@@ -140,13 +140,19 @@ void InflowOutflow<D>::placeBox(ParticleSet<D>& p, ConfigTable& in, const Vec<D>
       const double eta = (x[across] - lo[across]) / width;
       u = 6.0 * mean_velocity_ * eta * (1.0 - eta);
     }
-    Vec<D> v = Vec<D>::Zero();
-    v[ax] = sign_ * u * rampFactor(0.0);
-    buffer_.push_back(p.nFixed());
-    speed_.push_back(u);
-    lane_.push_back(laneOf(x));
-    p.add(x, v, rho0, mass, ParticleKind::inflow, next_id++);
+    addBufferParticle(p, x, u, rho0, mass, next_id);
   }
+}
+
+template <int D>
+void InflowOutflow<D>::addBufferParticle(ParticleSet<D>& p, const Vec<D>& x, double speed, double rho0, double mass,
+                                         std::uint64_t& next_id) {
+  Vec<D> v = Vec<D>::Zero();
+  v[axis_] = sign_ * speed * rampFactor(0.0);
+  buffer_.push_back(p.nFixed());
+  speed_.push_back(speed);
+  lane_.push_back(laneOf(x));
+  p.add(x, v, rho0, mass, ParticleKind::inflow, next_id++);
 }
 
 template <int D>
@@ -183,13 +189,8 @@ void InflowOutflow<D>::placeNozzle(ParticleSet<D>& p, const Vec<D>& lo, const Ve
                                : mean_velocity_;
       for (long i = 0; i < count; ++i) {
         const double theta = phase + step * static_cast<double>(i);
-        const Vec<D> x = station + r * (std::cos(theta) * u + std::sin(theta) * v);
-        Vec<D> vel = Vec<D>::Zero();
-        vel[ax] = sign_ * speed * rampFactor(0.0);
-        buffer_.push_back(p.nFixed());
-        speed_.push_back(speed);
-        lane_.push_back(laneOf(x));
-        p.add(x, vel, rho0, mass, ParticleKind::inflow, next_id++);
+        addBufferParticle(p, Vec<D>(station + r * (std::cos(theta) * u + std::sin(theta) * v)), speed, rho0, mass,
+                          next_id);
       }
     }
   }

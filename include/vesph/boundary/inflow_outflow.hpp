@@ -102,6 +102,9 @@ class InflowOutflow final : public StepHook<D> {
  private:
   // The buffer particles of fromConfig: the box's lattice (its profile across profile_axis), or
   // the circular nozzle's rings (radius nozzle_radius_).
+  // One buffer particle at x moving at speed along the flow (ramped), of the given mass.
+  void addBufferParticle(ParticleSet<D>& p, const Vec<D>& x, double speed, double rho0, double mass,
+                         std::uint64_t& next_id);
   void placeBox(ParticleSet<D>& p, ConfigTable& in, const Vec<D>& lo, const Vec<D>& hi, const std::array<long, D>& n,
                 double dx, double rho0, std::uint64_t& next_id);
   void placeNozzle(ParticleSet<D>& p, const Vec<D>& lo, const Vec<D>& hi, const std::array<long, D>& n, double dx,
