@@ -124,15 +124,33 @@ void NeighbourList<D>::build(const ParticleSet<D>& p) {
     cell_of_[i] = static_cast<Index>(c);
   }
   if (bad >= 0) throw NumericalFailure("non-finite position of particle id " + std::to_string(p.id[bad]));
-  for (std::size_t i = 0; i < N; ++i) ++cell_start_[cell_of_[i] + 1];
-  for (std::size_t c = 0; c < ncells; ++c) cell_start_[c + 1] += cell_start_[c];
-  cell_items_.resize(N);
-  {
-    std::vector<std::size_t> fill(cell_start_.begin(), cell_start_.end() - 1);
-    for (std::size_t i = 0; i < N; ++i) cell_items_[fill[cell_of_[i]]++] = static_cast<Index>(i);
-  }
+  // Counting sort of the particles by bin: start[b] .. start[b + 1] index items, the particles
+  // of bin b in increasing order (start holds nbins + 1 zeros on entry).
+  auto binParticles = [N](const auto& bin_of, std::size_t nbins, std::vector<std::size_t>& start,
+                          std::vector<Index>& items) {
+    for (std::size_t i = 0; i < N; ++i) ++start[bin_of[i] + 1];
+    for (std::size_t b = 0; b < nbins; ++b) start[b + 1] += start[b];
+    items.resize(N);
+    std::vector<std::size_t> fill(start.begin(), start.end() - 1);
+    for (std::size_t i = 0; i < N; ++i) items[fill[bin_of[i]]++] = static_cast<Index>(i);
+  };
+  binParticles(cell_of_, ncells, cell_start_, cell_items_);
 
   const double reach2 = (cutoff_ + skin_) * (cutoff_ + skin_);
+  // fn(j) for the particles j != i of items[begin, end) within reach of x_i.
+  auto testBin = [&](std::size_t i, const double* xi, const std::vector<Index>& items, std::size_t begin,
+                     std::size_t end, auto&& fn) {
+    for (std::size_t k = begin; k < end; ++k) {
+      const Index j = items[k];
+      if (j == i) continue;
+      double r2 = 0;
+      for (int a = 0; a < D; ++a) {
+        const double d = domain_.image(a, xi[a] - p.position[D * j + a]);
+        r2 += d * d;
+      }
+      if (r2 < reach2) fn(j);
+    }
+  };
   // Visits every candidate j of particle i; fn(j) for those within reach.
   auto forCandidates = [&](std::size_t i, auto&& fn) {
     std::array<int, D> ci;
@@ -142,18 +160,7 @@ void NeighbourList<D>::build(const ParticleSet<D>& p) {
       c /= block_n_[a];
     }
     const double* xi = &p.position[D * i];
-    forCellsAround(ci, [&](std::size_t cell) {
-      for (std::size_t k = cell_start_[cell]; k < cell_start_[cell + 1]; ++k) {
-        const Index j = cell_items_[k];
-        if (j == i) continue;
-        double r2 = 0;
-        for (int a = 0; a < D; ++a) {
-          const double d = domain_.image(a, xi[a] - p.position[D * j + a]);
-          r2 += d * d;
-        }
-        if (r2 < reach2) fn(j);
-      }
-    });
+    forCellsAround(ci, [&](std::size_t cell) { testBin(i, xi, cell_items_, cell_start_[cell], cell_start_[cell + 1], fn); });
   };
 
   // 3D: the cells above are at least one search radius wide, so the 27 around a particle hold
@@ -188,11 +195,7 @@ void NeighbourList<D>::build(const ParticleSet<D>& p) {
       sub_of[i] = static_cast<Index>(c);
     }
     sub_start.assign(nsub + 1, 0);
-    for (std::size_t i = 0; i < N; ++i) ++sub_start[sub_of[i] + 1];
-    for (std::size_t c = 0; c < nsub; ++c) sub_start[c + 1] += sub_start[c];
-    sub_items.resize(N);
-    std::vector<std::size_t> fill(sub_start.begin(), sub_start.end() - 1);
-    for (std::size_t i = 0; i < N; ++i) sub_items[fill[sub_of[i]]++] = static_cast<Index>(i);
+    binParticles(sub_of, nsub, sub_start, sub_items);
   }
   // As forCandidates, over the 5^D sub-cells around particle i's (wrapped on periodic axes,
   // where a cell count of at least 3 makes at least 6 sub-cells, so none is visited twice).
@@ -228,17 +231,7 @@ void NeighbourList<D>::build(const ParticleSet<D>& p) {
         cell += stride * static_cast<std::size_t>(cc);
         stride *= static_cast<std::size_t>(sub_n[a]);
       }
-      if (skip) continue;
-      for (std::size_t k = sub_start[cell]; k < sub_start[cell + 1]; ++k) {
-        const Index j = sub_items[k];
-        if (j == i) continue;
-        double r2 = 0;
-        for (int a = 0; a < D; ++a) {
-          const double d = domain_.image(a, xi[a] - p.position[D * j + a]);
-          r2 += d * d;
-        }
-        if (r2 < reach2) fn(j);
-      }
+      if (!skip) testBin(i, xi, sub_items, sub_start[cell], sub_start[cell + 1], fn);
     }
   };
   auto forListCandidates = [&](std::size_t i, auto&& fn) {
