@@ -61,21 +61,6 @@ max = [0.0, {top}]
 kind = "wall"
 min = [0.1, 0.0]
 max = [{hi}, {top}]
-[solver]
-scheme = "isph"
-{solver}
-[effects.pressure_gradient]
-form = "renormalised"
-[effects.viscosity]
-[effects.body_force]
-acceleration = [0.0, -9.81]
-[effects.free_surface]
-threshold = 0.97
-[integrator]
-type = "leapfrog"
-step = 1e-3
-[time]
-end = {end}
 """
 
 
@@ -115,14 +100,19 @@ max = [0.1, 0.0, {top}]
 kind = "wall"
 min = [0.0, 0.1, 0.0]
 max = [0.1, {hi}, {top}]
-[solver]
+"""
+
+
+# What the 2D and 3D tanks share: the ISPH scheme with the solver under test, gravity along
+# the last axis, a fixed step of 1 ms.
+TAIL = """[solver]
 scheme = "isph"
 {solver}
 [effects.pressure_gradient]
 form = "renormalised"
 [effects.viscosity]
 [effects.body_force]
-acceleration = [0.0, 0.0, -9.81]
+acceleration = {gravity}
 [effects.free_surface]
 threshold = 0.97
 [integrator]
@@ -221,7 +211,8 @@ def main(argv=None):
             layers = 5 if a.dimension == 2 else 3
             lo, hi, top = -layers * dx, 0.1 + layers * dx, 0.1 + 8 * dx
             n_fluid = n ** a.dimension
-            template = SCENE if a.dimension == 2 else SCENE_3D
+            template = (SCENE if a.dimension == 2 else SCENE_3D) + TAIL
+            gravity = "[0.0, -9.81]" if a.dimension == 2 else "[0.0, 0.0, -9.81]"
             for solver, threads in ((s, int(t)) for s in a.solvers.split(",") for t in a.threads.split(",")):
                 env = dict(os.environ, OMP_NUM_THREADS=str(threads))
                 if is_direct(solver) and n > a.direct_up_to:
@@ -232,7 +223,7 @@ def main(argv=None):
                     continue
                 scene = os.path.join(work, "bench.toml")
                 with open(scene, "w") as f:
-                    f.write(template.format(lo=repr(lo), hi=repr(hi), top=repr(top), dx=repr(dx),
+                    f.write(template.format(lo=repr(lo), hi=repr(hi), top=repr(top), dx=repr(dx), gravity=gravity,
                                          solver=solver_keys(solver), end=repr(a.steps * 1e-3)))
                 out = os.path.join(work, "out")
                 # /usr/bin/time -f %M: the run's peak resident memory (KiB), for the memory target
