@@ -461,6 +461,66 @@ TEST_CASE("integrators: the IMEX split is exact and frees the step from the visc
   CHECK(limits.relaxation == std::numeric_limits<double>::infinity());
 }
 
+TEST_CASE("integrators: the assembled velocity operator of the IMEX preconditioner is the viscous Jacobian") {
+  // The Poiseuille channel after a few steps: L (OdeSystem::implicitVelocityOperator) applied
+  // to a velocity perturbation w against f_I(y + w) - f_I(y) (exact: f_I is linear in the
+  // velocities). Away from the walls every row agrees to round-off for any w; next to them L
+  // lumps the wall velocities' dependence on the fluid's (the no-slip mirror) onto the
+  // diagonal, so there its rows agree for a uniform w (the row sums are exact) and differ for
+  // a varying one.
+  SceneHeader h;
+  Config cfg = loadScene(VESPH_SOURCE_DIR "/cases/poiseuille_newtonian.toml", {"time.end=0.002", "output.times=[0.002]"}, h);
+  Simulation<2> sim(cfg, h);
+  REQUIRE(sim.run(RunOptions{"", true, false, 0}).status == RunStatus::ok);
+  SphSystem<2>& sys = sim.system();
+  const std::vector<double> y = sim.state();
+  const StateSegments seg = sys.segments();
+  const std::size_t n = sys.particles.n_moving;
+  CsrMatrix L;
+  REQUIRE(sys.implicitVelocityOperator(0.002, y.data(), L));
+  REQUIRE(L.rows() == static_cast<int>(n));
+  for (std::size_t i = 0; i < n; ++i) REQUIRE(L.column[static_cast<std::size_t>(L.row_start[i])] == static_cast<int>(i));
+  const double support = sys.kernel.supportRadius();
+  std::vector<char> near_wall(n, 0);
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t b = n; b < sys.particles.size(); ++b) {
+      const double dx = sys.particles.position[2 * i] - sys.particles.position[2 * b];
+      const double dy = sys.particles.position[2 * i + 1] - sys.particles.position[2 * b + 1];
+      if (std::abs(dx) < 0.5 && dx * dx + dy * dy < support * support) near_wall[i] = 1;
+    }
+  std::vector<double> f0(y.size()), f1(y.size());
+  sys.rhsPart(RhsPart::implicit_part, 0.002, y.data(), f0.data());
+  for (const bool uniform : {false, true}) {
+    std::vector<double> perturbed = y;
+    for (std::size_t k = seg.velocity_begin; k < seg.velocity_end; ++k)
+      perturbed[k] += uniform ? (k % 2 ? 2e-3 : -1e-3) : 1e-3 * std::sin(0.37 * static_cast<double>(k));
+    sys.rhsPart(RhsPart::implicit_part, 0.002, perturbed.data(), f1.data());
+    double interior_error = 0, wall_error = 0;
+    std::size_t interior_rows = 0, wall_rows = 0;
+    for (std::size_t i = 0; i < n; ++i)
+      for (int a = 0; a < 2; ++a) {
+        double lw = 0, row_scale = 0;
+        for (int k = L.row_start[i]; k < L.row_start[i + 1]; ++k) {
+          const std::size_t c = seg.velocity_begin + 2 * static_cast<std::size_t>(L.column[k]) + static_cast<std::size_t>(a);
+          const double term = L.value[k] * (perturbed[c] - y[c]);
+          lw += term;
+          row_scale = std::max(row_scale, std::abs(term));
+        }
+        const double jw = f1[seg.velocity_begin + 2 * i + a] - f0[seg.velocity_begin + 2 * i + a];
+        double& error = near_wall[i] ? wall_error : interior_error;
+        error = std::max(error, std::abs(lw - jw) / row_scale);
+        (near_wall[i] ? wall_rows : interior_rows) += 1;
+      }
+    INFO("uniform " << uniform << ": interior rows " << interior_rows << ", error " << interior_error << "; wall rows "
+                    << wall_rows << ", error " << wall_error);
+    CHECK(interior_rows > n / 2);
+    CHECK(wall_rows > n / 10);
+    CHECK(interior_error < 1e-9);
+    if (uniform) CHECK(wall_error < 1e-9);
+    else CHECK(wall_error > 1e-3);
+  }
+}
+
 namespace {
 
 // A short start-up of a model's channel, once with the explicit adaptive 'arkode' and once with

@@ -157,6 +157,16 @@ void DummyWalls<D>::update(const RhsContext<D>& ctx, const NeighbourList<D>& lis
 }
 
 template <int D>
+void DummyWalls<D>::velocityDependence(const ParticleSet<D>& p, std::vector<double>& dependence) const {
+  const std::size_t n0 = p.n_moving;
+  for (std::size_t w = n0; w < p.size(); ++w) {
+    if (any_image_ && points_[w - n0].image) continue;
+    if (p.kind[w] == static_cast<std::uint8_t>(ParticleKind::inflow)) continue;
+    dependence[w - n0] = -1.0;
+  }
+}
+
+template <int D>
 double DummyWalls<D>::interpolateFields(ParticleSet<D>& p, Index w, std::span<const Neighbour<D>> fluid) const {
   // Fang eq. (46): the normalised interpolation with the volumes m_f/rho_f, for every flagged
   // field (0 without fluid neighbours). Returns the weight sum sum_f (m_f/rho_f) W_wf.

@@ -15,6 +15,9 @@
 // levels lag (docs/performance.md measures the trade-off).
 #include "amg_solver.hpp"
 
+#include "vesph/isph/amg_preconditioner.hpp"
+#include "vesph/time/integrator.hpp"
+
 #include <HYPRE.h>
 #include <HYPRE_parcsr_ls.h>
 #include <_hypre_parcsr_mv.h>
@@ -279,6 +282,73 @@ class AmgKrylovSolver final : public LinearSolver {
 };
 
 }  // namespace
+
+struct AmgPreconditioner::Hypre {
+  HYPRE_IJMatrix ij = nullptr;
+  HYPRE_ParCSRMatrix matrix = nullptr;  // owned by ij
+  HYPRE_ParVector b = nullptr, x = nullptr;
+  HYPRE_Solver amg = nullptr;
+  int n = 0;
+  std::vector<int> row_lengths, row_numbers;
+
+  void release() {
+    if (amg) HYPRE_BoomerAMGDestroy(amg);
+    if (b) HYPRE_ParVectorDestroy(b);
+    if (x) HYPRE_ParVectorDestroy(x);
+    if (ij) HYPRE_IJMatrixDestroy(ij);
+    amg = nullptr;
+    b = x = nullptr;
+    ij = nullptr;
+    matrix = nullptr;
+    n = 0;
+  }
+  ~Hypre() { release(); }
+};
+
+AmgPreconditioner::AmgPreconditioner() : hypre_(std::make_unique<Hypre>()) {}
+AmgPreconditioner::~AmgPreconditioner() = default;
+int AmgPreconditioner::size() const { return hypre_->n; }
+
+void AmgPreconditioner::setUp(const CsrMatrix& A) {
+  initialiseHypre();
+  Hypre& h = *hypre_;
+  h.release();
+  const int n = h.n = A.rows();
+  h.row_lengths.resize(static_cast<std::size_t>(n));
+  h.row_numbers.resize(static_cast<std::size_t>(n));
+  for (int i = 0; i < n; ++i) {
+    h.row_lengths[static_cast<std::size_t>(i)] = A.row_start[static_cast<std::size_t>(i) + 1] - A.row_start[static_cast<std::size_t>(i)];
+    h.row_numbers[static_cast<std::size_t>(i)] = i;
+  }
+  HYPRE_IJMatrixCreate(MPI_COMM_SELF, 0, n - 1, 0, n - 1, &h.ij);
+  HYPRE_IJMatrixSetObjectType(h.ij, HYPRE_PARCSR);
+  HYPRE_IJMatrixSetRowSizes(h.ij, h.row_lengths.data());
+  HYPRE_IJMatrixInitialize(h.ij);
+  HYPRE_IJMatrixAddToValues(h.ij, n, h.row_lengths.data(), h.row_numbers.data(), A.column.data(), A.value.data());
+  HYPRE_IJMatrixAssemble(h.ij);
+  HYPRE_IJMatrixGetObject(h.ij, reinterpret_cast<void**>(&h.matrix));
+  HYPRE_ParVectorCreate(MPI_COMM_SELF, n, nullptr, &h.b);
+  HYPRE_ParVectorInitialize(h.b);
+  HYPRE_ParVectorCreate(MPI_COMM_SELF, n, nullptr, &h.x);
+  HYPRE_ParVectorInitialize(h.x);
+  // One V-cycle per application, hypre's defaults otherwise (as the pressure solvers' AMG).
+  HYPRE_BoomerAMGCreate(&h.amg);
+  HYPRE_BoomerAMGSetPrintLevel(h.amg, 0);
+  HYPRE_BoomerAMGSetMaxIter(h.amg, 1);
+  HYPRE_BoomerAMGSetTol(h.amg, 0.0);
+  HYPRE_BoomerAMGSetup(h.amg, h.matrix, h.b, h.x);
+  HYPRE_ClearAllErrors();
+}
+
+void AmgPreconditioner::apply(const double* r, double* z) {
+  Hypre& h = *hypre_;
+  if (!h.amg) throw std::logic_error("AmgPreconditioner::apply before setUp");
+  std::copy(r, r + h.n, vectorData(h.b));
+  std::fill(vectorData(h.x), vectorData(h.x) + h.n, 0.0);
+  HYPRE_BoomerAMGSolve(h.amg, h.matrix, h.b, h.x);
+  HYPRE_ClearAllErrors();
+  std::copy(vectorData(h.x), vectorData(h.x) + h.n, z);
+}
 
 std::unique_ptr<LinearSolver> makeAmgSolver(const LinearSolverOptions& options) {
   return std::make_unique<AmgKrylovSolver>(options);

@@ -42,6 +42,32 @@ class Viscosity final : public PairEffect<D, Viscosity<D>> {
   // arkode-imex, which lifts the viscous step limit (docs/theory.md "Implicit-explicit integration").
   ImplicitPart implicitPart() const override { return ImplicitPart::all; }
 
+  // d(dv_i/dt)/dv_j = -w_ij for a fluid neighbour j, and the diagonal sum_j w_ij. A wall
+  // neighbour b's velocity is extrapolated from the fluid's, v_b = ... + sum_f c_bf v_f (the
+  // no-slip mirror: c_bf = -W_bf / sum W), so its term w_ib (v_i - v_b) adds -w_ib c_bf to
+  // every such f's column. Those entries are lumped onto the diagonal, w_ib (1 - sum_f c_bf)
+  // (2 w_ib for the mirror): the row sums stay exact, and the matrix keeps the signs of an
+  // M-matrix, which BoomerAMG needs (with the entries in place, of the opposite sign to the
+  // fluid's, its V-cycle let GMRES fail on the die swell; lumped, GMRES takes 2.9 times fewer
+  // iterations there than with the Jacobi preconditioner: docs/performance.md).
+  bool couplesVelocities() const override { return true; }
+  void velocityCoupling(const RhsContext<D>& ctx, Index i, std::span<const Neighbour<D>> moving,
+                        std::span<const Neighbour<D>> fixed, std::span<const double> wall_dependence,
+                        VelocityCouplingRow& row) const override {
+    const ParticleSet<D>& p = ctx.particles;
+    const Local l{Vec<D>::Zero(), Vec<D>::Zero(), 2.0 * mu_ / p.density[i], nullptr, p.density.data(), p.mass.data(), nullptr, 0};
+    double diagonal = 0;
+    for (const Neighbour<D>& nb : moving) {
+      const double w = weight(nb, l);
+      diagonal += w;
+      row.entries.emplace_back(nb.j, -w);
+    }
+    const std::size_t fixed0 = p.n_moving;
+    for (const Neighbour<D>& nb : fixed)
+      diagonal += weight(nb, l) * (wall_velocity_ ? 1.0 - wall_dependence[nb.j - fixed0] : 1.0);
+    row.diagonal += diagonal;
+  }
+
   // Array pointers live in the accumulator so that the pair loop keeps them in registers.
   struct Local {
     Vec<D> acc;

@@ -242,6 +242,47 @@ void SphSystem<D>::evaluateWith(const PhaseLists& lists, RhsPart part, double t,
 }
 
 template <int D>
+bool SphSystem<D>::implicitVelocityOperator(double t, const double* y, CsrMatrix& L) {
+  std::vector<Effect<D>*> coupling;
+  for (const auto* list : {&implicit_.gradients, &implicit_.forces})
+    for (Effect<D>* e : *list)
+      if (e->couplesVelocities()) coupling.push_back(e);
+  if (coupling.empty()) return false;
+  unpack(y);
+  placeFixed(t);
+  if (neighbours.update(particles)) driver.prepare(neighbours);
+  const std::size_t n = particles.n_moving;
+  coupling_rows_.resize(n);
+  const RhsContext<D> ctx{particles, kernel, domain, t, nullptr, nullptr, nullptr, field_rates_.data(), RhsPart::implicit_diagonal};
+  wall_dependence_.assign(particles.nFixed(), 0.0);
+  for (auto& b : boundaries) b->velocityDependence(particles, wall_dependence_);
+  driver.forEachMoving(particles, kernel, domain, neighbours, false,
+                       [&](Index i, std::span<const Neighbour<D>> moving, std::span<const Neighbour<D>> fixed) {
+                         VelocityCouplingRow& row = coupling_rows_[i];
+                         row.diagonal = 0;
+                         row.entries.clear();
+                         for (Effect<D>* e : coupling) e->velocityCoupling(ctx, i, moving, fixed, wall_dependence_, row);
+                       });
+  L.row_start.assign(n + 1, 0);
+  for (std::size_t i = 0; i < n; ++i)
+    L.row_start[i + 1] = L.row_start[i] + 1 + static_cast<int>(coupling_rows_[i].entries.size());
+  L.column.resize(static_cast<std::size_t>(L.row_start[n]));
+  L.value.resize(L.column.size());
+#pragma omp parallel for schedule(static) if (n >= kParallelMinimum)
+  for (std::size_t i = 0; i < n; ++i) {
+    std::size_t k = static_cast<std::size_t>(L.row_start[i]);
+    L.column[k] = static_cast<int>(i);
+    L.value[k] = coupling_rows_[i].diagonal;
+    for (const auto& [j, c] : coupling_rows_[i].entries) {
+      ++k;
+      L.column[k] = static_cast<int>(j);
+      L.value[k] = c;
+    }
+  }
+  return true;
+}
+
+template <int D>
 StabilitySnapshot SphSystem<D>::stability() const {
   StabilitySnapshot s;
   s.h = kernel.h;

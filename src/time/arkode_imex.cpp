@@ -11,16 +11,17 @@
 // The right-hand side splits as f = f_E + f_I (OdeSystem::rhsPart): each effect declares its
 // implicit term (the viscous force, the linear relaxation -S/lambda of Oldroyd-B/UCM). f_I is
 // linear in the velocities and evolving stresses at given positions and densities, and has no
-// position or density rates. Each implicit stage solves z - gamma f_I(z) = a by Newton's method
-// with a matrix-free GMRES (SUNLinSol_SPGMR). The Jacobian-vector product is exact by
-// linearity: J w = (f_I(y + sigma w_v) - f_I(y)) / sigma with only the velocity and stress
-// components perturbed, so the positions and densities are frozen in it (their columns of the
-// Jacobian are dropped). GMRES is preconditioned (right) by the diagonal of I - gamma J
-// (rhsPart implicit_diagonal: the viscous sum -sum_j w_ij, the relaxation -1/lambda), set up
-// when ARKODE asks for it. The first Newton iteration therefore sets the stage positions
-// exactly (their rows are the identity) and the second solves the velocities at those
-// positions; the convergence test, not ARKStepSetLinear's single iteration, ends it (one
-// iteration would leave an error proportional to the predictor's position error).
+// position or density rates. Each implicit stage solves z - gamma f_I(z) = a: its position and
+// density rows are a's (stageSolve sets them before Newton's iteration starts), and at those
+// positions the rest is linear, so one Newton iteration (ARKStepSetLinear) with a GMRES solve
+// (SUNLinSol_SPGMR, matrix-free) is the stage's solution, and the stage's implicit rate is
+// deduced from it (ARKStepSetDeduceImplicitRhs) instead of evaluated again. The
+// Jacobian-vector product is exact by linearity: J w = (f_I(y + sigma w_v) - f_I(y)) / sigma
+// with only the velocity and stress components perturbed. GMRES is preconditioned (right) by
+// integrator.preconditioner: "amg" (default) one BoomerAMG V-cycle per velocity component on
+// the assembled I - gamma L, L the viscous coupling (OdeSystem::implicitVelocityOperator), and
+// Jacobi on the other rows; "diagonal" Jacobi on all rows (rhsPart implicit_diagonal: the
+// viscous sum -sum_j w_ij, the relaxation -1/lambda). Both are set up when ARKODE asks.
 //
 // As for ERKStep (src/time/arkode.cpp): the state buffer is wrapped without copy, output
 // times are reached with a stop time, afterStep runs in the post-process function, and a
@@ -29,6 +30,7 @@
 #include <arkode/arkode_arkstep.h>
 #include <sundials/sundials_context.h>
 #include <sunlinsol/sunlinsol_spgmr.h>
+#include <sunnonlinsol/sunnonlinsol_newton.h>
 
 #include <algorithm>
 #include <cmath>
@@ -36,6 +38,7 @@
 
 #include "sundials_support.hpp"
 #include "vesph/core/types.hpp"
+#include "vesph/isph/amg_preconditioner.hpp"
 #include "vesph/time/integrator_factory.hpp"
 
 namespace vesph {
@@ -70,16 +73,21 @@ namespace {
 // at 20-100x the explicit limit converges in a few iterations.
 constexpr int kKrylovDimension = 20;
 
+// integrator.preconditioner: how GMRES on the stage systems is preconditioned.
+enum class StagePreconditioner { diagonal, amg };
+
 class ArkodeImex final : public Integrator {
  public:
   ArkodeImex(bool adaptive, const ArkPairInfo& pair, const StepControl& control, ErrorTolerances tolerances,
-             double initial_step)
-      : adaptive_(adaptive), pair_(pair), control_(control), tol_(std::move(tolerances)), initial_step_(initial_step) {
+             double initial_step, StagePreconditioner preconditioner)
+      : adaptive_(adaptive), pair_(pair), control_(control), tol_(std::move(tolerances)), initial_step_(initial_step),
+        preconditioner_(preconditioner) {
     if (SUNContext_Create(nullptr, &sunctx_) != 0) throw std::runtime_error("SUNContext_Create failed");
   }
   ~ArkodeImex() override {
     if (mem_) ARKStepFree(&mem_);
     if (linear_solver_) SUNLinSolFree(linear_solver_);
+    if (nonlinear_solver_) SUNNonlinSolFree(nonlinear_solver_);
     if (y_) N_VDestroy(y_);
     if (atol_) N_VDestroy(atol_);
     if (sunctx_) SUNContext_Free(&sunctx_);
@@ -105,7 +113,7 @@ class ArkodeImex final : public Integrator {
     // The tolerances set the error control (adaptive) and the Newton and Krylov stopping
     // tests (both modes).
     setTolerances();
-    attachLinearSolver();
+    attachStageSolver();
     if (adaptive_) {
       checkArkode(ARKStepSetStabilityFn(mem_, &ArkodeImex::stability, this), "SetStabilityFn");
       // As for ERKStep (src/time/arkode.cpp): the limits carry their coefficients already,
@@ -177,8 +185,19 @@ class ArkodeImex final : public Integrator {
     checkArkode(ARKStepSVtolerances(mem_, tol_.rtol, atol_), "SVtolerances");
   }
 
-  // Matrix-free GMRES on the stage systems (I - gamma J) x = b, J w from jtimes.
-  void attachLinearSolver() {
+  // The stage solver: Newton's method with the stage's positions and densities set first
+  // (stageSolve), so that one iteration solves the stage (ARKStepSetLinear: f_I is linear in
+  // the rest at those positions), and the implicit rates deduced from it instead of evaluated
+  // again; matrix-free GMRES on (I - gamma J) x = b, J w from jtimes.
+  void attachStageSolver() {
+    if (nonlinear_solver_) SUNNonlinSolFree(nonlinear_solver_);
+    nonlinear_solver_ = SUNNonlinSol_Newton(y_, sunctx_);
+    if (!nonlinear_solver_) throw std::runtime_error("SUNNonlinSol_Newton failed");
+    newton_solve_ = nonlinear_solver_->ops->solve;
+    nonlinear_solver_->ops->solve = &ArkodeImex::stageSolve;
+    checkArkode(ARKStepSetNonlinearSolver(mem_, nonlinear_solver_), "SetNonlinearSolver");
+    checkArkode(ARKStepSetLinear(mem_, 0), "SetLinear");
+    checkArkode(ARKStepSetDeduceImplicitRhs(mem_, SUNTRUE), "SetDeduceImplicitRhs");
     if (linear_solver_) SUNLinSolFree(linear_solver_);
     linear_solver_ = SUNLinSol_SPGMR(y_, SUN_PREC_RIGHT, kKrylovDimension, sunctx_);
     if (!linear_solver_) throw std::runtime_error("SUNLinSol_SPGMR failed");
@@ -188,6 +207,7 @@ class ArkodeImex final : public Integrator {
           "SetPreconditioner");
     jacobian_diagonal_.assign(sys_->size(), 0.0);
     inverse_preconditioner_.assign(sys_->size(), 1.0);
+    have_velocity_operator_ = false;  // set up again at the new length
   }
 
   void resize(double tout) {
@@ -197,7 +217,7 @@ class ArkodeImex final : public Integrator {
     N_VDestroy(y_);
     y_ = fresh;
     setTolerances();
-    attachLinearSolver();  // its work vectors have the old length
+    attachStageSolver();  // its work vectors have the old length
     checkArkode(ARKStepSetStopTime(mem_, tout), "SetStopTime");
   }
 
@@ -244,8 +264,12 @@ class ArkodeImex final : public Integrator {
     return 0;
   }
 
-  // The Jacobi preconditioner P = diag(I - gamma J): the diagonal of J at y (recomputed only
-  // when ARKODE asks, jok false; the positions change slowly), 1 - gamma J_kk inverted.
+  // P approximates I - gamma J. diagonal: the Jacobi preconditioner diag(I - gamma J), the
+  // diagonal of J at y, 1 - gamma J_kk inverted. amg: the velocity rows by one BoomerAMG
+  // V-cycle per component on the assembled I - gamma L, L the implicit part's scalar velocity
+  // coupling (OdeSystem::implicitVelocityOperator: the viscous force's, walls on its
+  // diagonal), the other rows (stresses) by Jacobi. J (its diagonal and L) is recomputed only
+  // when ARKODE asks (jok false; the positions change slowly); a new gamma rebuilds P from it.
   static int preconditionerSetup(realtype t, N_Vector y, N_Vector, booleantype jok, booleantype* jcur, realtype gamma,
                                  void* data) {
     auto* self = static_cast<ArkodeImex*>(data);
@@ -253,6 +277,13 @@ class ArkodeImex final : public Integrator {
       if (const int flag = self->evaluate(RhsPart::implicit_diagonal, t, N_VGetArrayPointer(y), self->jacobian_diagonal_.data()))
         return flag;
       ++self->jtimes_evals_;
+      if (self->preconditioner_ == StagePreconditioner::amg) {
+        if (const int flag = self->callbacks_.guarded([&] {
+              self->have_velocity_operator_ =
+                  self->sys_->implicitVelocityOperator(t, N_VGetArrayPointer(y), self->velocity_operator_);
+            }))
+          return flag;
+      }
       *jcur = SUNTRUE;
     } else {
       *jcur = SUNFALSE;
@@ -262,6 +293,8 @@ class ArkodeImex final : public Integrator {
       const double p = 1.0 - gamma * self->jacobian_diagonal_[k];
       self->inverse_preconditioner_[k] = p > 0 ? 1.0 / p : 1.0;  // J_kk <= 0 for the terms here
     }
+    if (self->preconditioner_ == StagePreconditioner::amg && self->have_velocity_operator_)
+      return self->callbacks_.guarded([&] { self->setUpVelocityMultigrid(gamma); });
     return 0;
   }
   static int preconditionerSolve(realtype, N_Vector, N_Vector, N_Vector r, N_Vector z, realtype, realtype, int,
@@ -271,7 +304,64 @@ class ArkodeImex final : public Integrator {
     double* zv = N_VGetArrayPointer(z);
     const std::size_t n = self->inverse_preconditioner_.size();
     for (std::size_t k = 0; k < n; ++k) zv[k] = self->inverse_preconditioner_[k] * rv[k];
+    if (self->preconditioner_ == StagePreconditioner::amg && self->have_velocity_operator_)
+      return self->callbacks_.guarded([&] { self->applyVelocityMultigrid(rv, zv); });
     return 0;
+  }
+
+  // I - gamma L assembled from the kept L, and its hierarchy.
+  void setUpVelocityMultigrid(double gamma) {
+    const CsrMatrix& L = velocity_operator_;
+    stage_matrix_.row_start = L.row_start;
+    stage_matrix_.column = L.column;
+    stage_matrix_.value.resize(L.value.size());
+    const int rows = L.rows();
+    for (int i = 0; i < rows; ++i) {
+      const int first = L.row_start[static_cast<std::size_t>(i)];
+      for (int k = first; k < L.row_start[static_cast<std::size_t>(i) + 1]; ++k)
+        stage_matrix_.value[static_cast<std::size_t>(k)] = -gamma * L.value[static_cast<std::size_t>(k)];
+      stage_matrix_.value[static_cast<std::size_t>(first)] += 1.0;  // the diagonal is first in each row
+    }
+    multigrid_.setUp(stage_matrix_);
+    component_residual_.resize(static_cast<std::size_t>(rows));
+    component_solution_.resize(static_cast<std::size_t>(rows));
+  }
+
+  // The velocity rows of z from r: one V-cycle per component (the state holds v_i's D
+  // components together).
+  void applyVelocityMultigrid(const double* r, double* z) {
+    const StateSegments seg = sys_->segments();
+    const std::size_t n = seg.velocity_begin - seg.position_end;
+    if (n == 0) return;
+    const std::size_t dim = seg.position_end / n;
+    if (n != static_cast<std::size_t>(velocity_operator_.rows()))
+      throw std::logic_error("arkode-imex: the velocity operator's size is not the particle count");
+    for (std::size_t a = 0; a < dim; ++a) {
+      for (std::size_t i = 0; i < n; ++i) component_residual_[i] = r[seg.velocity_begin + dim * i + a];
+      multigrid_.apply(component_residual_.data(), component_solution_.data());
+      for (std::size_t i = 0; i < n; ++i) z[seg.velocity_begin + dim * i + a] = component_solution_[i];
+    }
+  }
+
+  // An implicit stage z = zpred + zcor solves zcor - gamma f_I(z) = sdata (ARKODE's form). f_I
+  // has no position or density rate, so those rows of zcor are sdata's: set here, before
+  // Newton's first iteration, the stage's positions are exact, f_I is linear in the unknowns
+  // left (velocities, stresses) at those positions, and the one iteration of the linear mode is
+  // the stage's solution to the Krylov tolerance. (Without it Newton's first iteration ran at
+  // the predicted positions and a second, with its own GMRES solve, was needed.)
+  static int stageSolve(SUNNonlinearSolver nls, N_Vector y0, N_Vector ycor, N_Vector w, realtype tol,
+                        booleantype call_setup, void* arkode_mem) {
+    realtype tcur = 0, gamma = 0;
+    N_Vector zpred = nullptr, z = nullptr, fi = nullptr, sdata = nullptr;
+    void* data = nullptr;
+    if (ARKStepGetNonlinearSystemData(arkode_mem, &tcur, &zpred, &z, &fi, &gamma, &sdata, &data) != ARK_SUCCESS)
+      return SUN_NLS_MEM_NULL;
+    auto* self = static_cast<ArkodeImex*>(data);
+    const std::size_t begin = self->sys_->segments().velocity_begin;
+    const double* known = N_VGetArrayPointer(sdata);
+    double* correction = N_VGetArrayPointer(ycor);
+    std::copy(known, known + begin, correction);
+    return self->newton_solve_(nls, y0, ycor, w, tol, call_setup, arkode_mem);
   }
 
   static int postStep(realtype t, N_Vector y, void* data) {
@@ -291,12 +381,19 @@ class ArkodeImex final : public Integrator {
   SUNContext sunctx_ = nullptr;
   void* mem_ = nullptr;
   SUNLinearSolver linear_solver_ = nullptr;
+  SUNNonlinearSolver nonlinear_solver_ = nullptr;
+  int (*newton_solve_)(SUNNonlinearSolver, N_Vector, N_Vector, N_Vector, realtype, booleantype, void*) = nullptr;
   N_Vector y_ = nullptr, atol_ = nullptr;
   OdeSystem* sys_ = nullptr;
   double t_ = 0;
   bool resizable_ = false;
   std::uint64_t jtimes_evals_ = 0;  // implicit evaluations for J w and the preconditioner
   std::vector<double> jacobian_diagonal_, inverse_preconditioner_;
+  StagePreconditioner preconditioner_;
+  bool have_velocity_operator_ = false;
+  CsrMatrix velocity_operator_, stage_matrix_;  // L, and I - gamma L
+  AmgPreconditioner multigrid_;
+  std::vector<double> component_residual_, component_solution_;
   ArkodeCallbackState callbacks_;
 };
 
@@ -310,19 +407,25 @@ const ArkPairInfo& pairFromConfig(ConfigTable& cfg) {
   cfg.fail("table", "a known ARK pair");
 }
 
+// integrator.preconditioner (default amg: docs/performance.md measures both).
+StagePreconditioner preconditionerFromConfig(ConfigTable& cfg) {
+  return cfg.choice("preconditioner", std::string("amg"), {"amg", "diagonal"}) == "amg" ? StagePreconditioner::amg
+                                                                                     : StagePreconditioner::diagonal;
+}
+
 }  // namespace
 
 std::unique_ptr<Integrator> makeArkodeImex(ConfigTable& cfg, const StepControl& c, const ReferenceScales& s) {
   const ArkPairInfo& pair = pairFromConfig(cfg);
   ErrorTolerances tol = readTolerances(cfg, s);
   const double h0 = cfg.optionalNumber("initial_step", Bound::positive, "s").value_or(0.0);
-  return std::make_unique<ArkodeImex>(true, pair, c, std::move(tol), h0);
+  return std::make_unique<ArkodeImex>(true, pair, c, std::move(tol), h0, preconditionerFromConfig(cfg));
 }
 
 std::unique_ptr<Integrator> makeArkodeImexFixed(ConfigTable& cfg, const StepControl& c, const ReferenceScales& s) {
   const ArkPairInfo& pair = pairFromConfig(cfg);
   ErrorTolerances tol = readTolerances(cfg, s);  // for the Newton and Krylov stopping tests
-  return std::make_unique<ArkodeImex>(false, pair, c, std::move(tol), 0.0);
+  return std::make_unique<ArkodeImex>(false, pair, c, std::move(tol), 0.0, preconditionerFromConfig(cfg));
 }
 
 }  // namespace vesph

@@ -21,6 +21,11 @@ class Boundary {
   virtual bool movesFixed() const { return false; }
   virtual void place(double t, ParticleSet<D>& particles) {}
   virtual void update(const RhsContext<D>& ctx, const NeighbourList<D>& list, PairDriver<D>& driver) = 0;
+  // How the fixed particles' velocities, as this boundary sets them from the fluid's
+  // (v_w = prescribed + sum_f c_wf v_f), follow a uniform fluid velocity: dependence[w -
+  // n_moving] = sum_f c_wf (-1 for the no-slip mirror; left 0 for a prescribed velocity). For
+  // the assembled preconditioner of arkode-imex (OdeSystem::implicitVelocityOperator).
+  virtual void velocityDependence(const ParticleSet<D>& particles, std::vector<double>& dependence) const {}
   // The moving set changed between steps: fixed particles moved to new indices (ParticleRemap).
   virtual void resized(const ParticleRemap& remap) {}
 };

@@ -72,6 +72,9 @@ class DummyWalls final : public Boundary<D> {
   void setup(Setup<D>& s) override;
   void update(const RhsContext<D>& ctx, const NeighbourList<D>& list, PairDriver<D>& driver) override;
   void resized(const ParticleRemap& remap) override;
+  // The no-slip mirror 2 u_w - (the fluid's Shepard average): -1; the boundary particles of
+  // image walls and inflow buffers carry prescribed velocities: 0.
+  void velocityDependence(const ParticleSet<D>& particles, std::vector<double>& dependence) const override;
 
  private:
   Field* wall_velocity_ = nullptr;

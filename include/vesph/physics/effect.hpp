@@ -108,6 +108,14 @@ using ArrayLookup = std::function<const std::vector<double>*(const std::string&)
 template <int D>
 class Effect;
 
+// One row of the implicit part's scalar velocity coupling (Effect::velocityCoupling): the
+// derivative of particle i's implicit velocity rate by its own velocity (diagonal) and by
+// moving neighbour j's (entries), the same for every component.
+struct VelocityCouplingRow {
+  double diagonal = 0;
+  std::vector<std::pair<Index, double>> entries;
+};
+
 // The state an integrator has just accepted (Effect::afterStep): the moving particles'
 // positions [n*D], densities [n] and velocities [n*D] at time t, reached by a step of dt.
 template <int D>
@@ -177,6 +185,15 @@ class Effect {
   virtual void stability(StabilityInputs& in) const {}
   // The term an implicit-explicit integrator may treat implicitly (see ImplicitPart).
   virtual ImplicitPart implicitPart() const { return ImplicitPart::none; }
+  // An implicit term that couples the velocities of neighbours through one scalar per pair,
+  // the same for every component (the viscous force), says so and adds particle i's row of
+  // that coupling: the assembled preconditioner of arkode-imex's stage solves
+  // (OdeSystem::implicitVelocityOperator). A fixed neighbour b's velocity follows the fluid's
+  // by wall_dependence[b - n_moving] (Boundary::velocityDependence).
+  virtual bool couplesVelocities() const { return false; }
+  virtual void velocityCoupling(const RhsContext<D>& ctx, Index i, std::span<const Neighbour<D>> moving,
+                                std::span<const Neighbour<D>> fixed, std::span<const double> wall_dependence,
+                                VelocityCouplingRow& row) const {}
   // The scale of the stress an evolving model produces at velocity V over length L (Pa), for
   // default error-control tolerances; 0 when the effect evolves no stress.
   virtual double stressScale(double velocity, double length) const { return 0.0; }

@@ -33,6 +33,9 @@ class IntegratedSystem final : public OdeSystem {
   StabilitySnapshot stability() const override { return system_.stability(); }
   void rhsPart(RhsPart part, double t, const double* y, double* ydot) override { system_.rhsPart(part, t, y, ydot); }
   StabilitySnapshot explicitStability() const override { return system_.explicitStability(); }
+  bool implicitVelocityOperator(double t, const double* y, CsrMatrix& L) override {
+    return system_.implicitVelocityOperator(t, y, L);
+  }
   bool afterStep(double t, double dt, double* y) override {
     system_.afterStep(t, dt, y);
     return observer_.accepted(t, dt, y);

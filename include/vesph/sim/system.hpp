@@ -60,6 +60,9 @@ class SphSystem final : public OdeSystem, public StateEvaluator {
   void rhsPart(RhsPart part, double t, const double* y, double* ydot) override;
   // The stability inputs without those of the implicit terms, at the last explicit evaluation.
   StabilitySnapshot explicitStability() const override;
+  // The implicit part's scalar velocity coupling (OdeSystem::implicitVelocityOperator) from the
+  // implicit effects that declare one (Effect::couplesVelocities): one neighbour pass.
+  bool implicitVelocityOperator(double t, const double* y, CsrMatrix& L) override;
 
   // What the hooks see of the system (vesph/physics/step_hook.hpp). A system also converts to
   // it, so that code handing the system itself to a hook (tests: proj.apply(sys, ...)) reads as
@@ -125,6 +128,8 @@ class SphSystem final : public OdeSystem, public StateEvaluator {
 
   std::vector<Boundary<D>*> moving_boundaries_;
   PhaseLists full_, explicit_, implicit_;
+  std::vector<VelocityCouplingRow> coupling_rows_;  // implicitVelocityOperator's rows, kept for their capacity
+  std::vector<double> wall_dependence_;              // Boundary::velocityDependence
   std::vector<Field*> evolving_;
   std::vector<double*> field_rates_;
   StabilityInputs stability_inputs_;

@@ -80,6 +80,14 @@ struct StepLimits {
 };
 StepLimits stepLimits(const StabilitySnapshot& s, const StepControl& c);
 
+// A square sparse matrix in compressed rows (the diagonal first in each row).
+struct CsrMatrix {
+  std::vector<int> row_start{0};  // rows() + 1 entries
+  std::vector<int> column;
+  std::vector<double> value;
+  int rows() const { return static_cast<int>(row_start.size()) - 1; }
+};
+
 class OdeSystem {
  public:
   virtual ~OdeSystem() = default;
@@ -104,6 +112,12 @@ class OdeSystem {
   // The stability inputs of the explicit part f_E alone, at its last evaluation: the limits of
   // terms in f_I (viscous, relaxation) are absent. Same as stability() without a split.
   virtual StabilitySnapshot explicitStability() const { return stability(); }
+  // The velocity block of f_I's Jacobian when it is one scalar operator L shared by every
+  // velocity component (d f_I,v_i / d v_j = L_ij I for moving particles i, j; a fixed
+  // neighbour's share on the diagonal), at y: the matrix of the assembled preconditioner of the
+  // implicit stage solves (docs/theory.md §9.5). Returns false when the implicit part has no
+  // such coupling (the preconditioner then stays diagonal).
+  virtual bool implicitVelocityOperator(double t, const double* y, CsrMatrix& L) { return false; }
   // Called after each accepted step with the new state; returns false to stop the run.
   virtual bool afterStep(double t, double dt, double* y) = 0;
   // Whether afterStep may change the state (a post-step projection): the fixed-step
