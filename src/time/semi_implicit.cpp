@@ -113,6 +113,7 @@ class SemiImplicit final : public FixedStepIntegrator {
     const std::size_t begin = implicit_begin_;
     const double gamma_tau = kGamma * tau;
     // Jacobi: diag(I - gamma tau J)^{-1}; J_kk <= 0 for the implicit terms.
+#pragma omp parallel for schedule(static) if (m_ >= kParallelMinimumValues)
     for (std::size_t k = 0; k < m_; ++k) {
       const double p = 1.0 - gamma_tau * diagonal_[begin + k];
       inverse_preconditioner_[k] = p > 0 ? 1.0 / p : 1.0;
@@ -121,6 +122,7 @@ class SemiImplicit final : public FixedStepIntegrator {
     std::copy(y_, y_ + n_, base_.begin());
     solveStage(t + gamma_tau, tau, gamma_tau, k1_);
     // Stage 2 from y + (1 - gamma) tau k1.
+#pragma omp parallel for schedule(static) if (m_ >= kParallelMinimumValues)
     for (std::size_t k = 0; k < m_; ++k) base_[begin + k] = y_[begin + k] + (1.0 - kGamma) * tau * k1_[k];
     solveStage(t + tau, tau, gamma_tau, k2_);
 #pragma omp parallel for schedule(static) if (m_ >= kParallelMinimumValues)
@@ -137,6 +139,7 @@ class SemiImplicit final : public FixedStepIntegrator {
     // The perturbation scale of J w (as arkode_imex.cpp's jtimes): w scaled to the size of the
     // base values, so that the difference quotient's round-off stays relative.
     base_max_ = 0;
+#pragma omp parallel for reduction(max : base_max_) schedule(static) if (m_ >= kParallelMinimumValues)
     for (std::size_t i = 0; i < m_; ++i) base_max_ = std::max(base_max_, std::abs(base_[begin + i]));
     setWeights(tau);
     gmres(t, gamma_tau, k);
@@ -162,6 +165,7 @@ class SemiImplicit final : public FixedStepIntegrator {
   void applyOperator(double t, double gamma_tau, const double* u, double* out) {
     const std::size_t begin = implicit_begin_;
     double u_max = 0;
+#pragma omp parallel for reduction(max : u_max) schedule(static) if (m_ >= kParallelMinimumValues)
     for (std::size_t i = 0; i < m_; ++i) u_max = std::max(u_max, std::abs(u[i]));
     if (u_max == 0) {
       std::fill(out, out + m_, 0.0);
@@ -208,6 +212,7 @@ class SemiImplicit final : public FixedStepIntegrator {
     constexpr int M = kKrylovDimension;
     std::fill(k.begin(), k.end(), 0.0);
     double* r = w_.data();
+#pragma omp parallel for schedule(static) if (m_ >= kParallelMinimumValues)
     for (std::size_t i = 0; i < m_; ++i) r[i] = weight_[i] * b_[i];
     double beta = std::sqrt(dot(r, r));
     if (!std::isfinite(beta)) throw NumericalFailure(failure(t, "the implicit part is not finite"));
@@ -217,6 +222,7 @@ class SemiImplicit final : public FixedStepIntegrator {
     double h[M + 1][M] = {}, cs[M] = {}, sn[M] = {}, g[M + 1] = {}, coefficients[M] = {};
     while (true) {
       double* v0 = krylov_.data();
+#pragma omp parallel for schedule(static) if (m_ >= kParallelMinimumValues)
       for (std::size_t i = 0; i < m_; ++i) v0[i] = r[i] / beta;
       std::fill(std::begin(g), std::end(g), 0.0);
       g[0] = beta;
@@ -224,19 +230,23 @@ class SemiImplicit final : public FixedStepIntegrator {
       double residual = beta;
       for (int j = 0; j < M; ++j) {
         const double* vj = krylov_.data() + static_cast<std::size_t>(j) * m_;
+#pragma omp parallel for schedule(static) if (m_ >= kParallelMinimumValues)
         for (std::size_t i = 0; i < m_; ++i) z_[i] = inverse_preconditioner_[i] * vj[i] / weight_[i];
         applyOperator(t, gamma_tau, z_.data(), x_.data());
         double* w = w_.data();
+#pragma omp parallel for schedule(static) if (m_ >= kParallelMinimumValues)
         for (std::size_t i = 0; i < m_; ++i) w[i] = weight_[i] * x_[i];
         for (int i = 0; i <= j; ++i) {  // modified Gram-Schmidt
           const double* vi = krylov_.data() + static_cast<std::size_t>(i) * m_;
           h[i][j] = dot(w, vi);
+#pragma omp parallel for schedule(static) if (m_ >= kParallelMinimumValues)
           for (std::size_t q = 0; q < m_; ++q) w[q] -= h[i][j] * vi[q];
         }
         h[j + 1][j] = std::sqrt(dot(w, w));
         const double subdiagonal = h[j + 1][j];
         if (subdiagonal > 0) {
           double* next = krylov_.data() + static_cast<std::size_t>(j + 1) * m_;
+#pragma omp parallel for schedule(static) if (m_ >= kParallelMinimumValues)
           for (std::size_t q = 0; q < m_; ++q) next[q] = w[q] / subdiagonal;
         }
         for (int i = 0; i < j; ++i) {  // previous rotations on the new column
@@ -266,12 +276,15 @@ class SemiImplicit final : public FixedStepIntegrator {
       std::fill(z_.begin(), z_.end(), 0.0);
       for (int i = 0; i < used; ++i) {
         const double* vi = krylov_.data() + static_cast<std::size_t>(i) * m_;
+#pragma omp parallel for schedule(static) if (m_ >= kParallelMinimumValues)
         for (std::size_t q = 0; q < m_; ++q) z_[q] += coefficients[i] * vi[q];
       }
+#pragma omp parallel for schedule(static) if (m_ >= kParallelMinimumValues)
       for (std::size_t q = 0; q < m_; ++q) k[q] += inverse_preconditioner_[q] * z_[q] / weight_[q];
       if (residual <= target) return;
       // Restart from the true residual (also after a breakdown that did not converge).
       applyOperator(t, gamma_tau, k.data(), x_.data());
+#pragma omp parallel for schedule(static) if (m_ >= kParallelMinimumValues)
       for (std::size_t i = 0; i < m_; ++i) r[i] = weight_[i] * (b_[i] - x_[i]);
       beta = std::sqrt(dot(r, r));
       if (beta <= target) return;
