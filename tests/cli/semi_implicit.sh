@@ -63,6 +63,10 @@ F=$SRC/cases/channel_inflow_outflow.toml
 expect 0 "ok: finished" -- "$VESPH" run "$F" -o "$WORK/inflow" --quiet --set integrator.type=semi-implicit --set time.end=0.03
 $PY -c "import sys, h5py; d = h5py.File(sys.argv[1], 'r')['diagnostics']; sys.exit(0 if d['released'][-1] > 0 and d['removed'][-1] > 0 else 1)" \
   "$WORK/inflow/channel_inflow_outflow.h5" && pass || fail "inflow: nothing released or removed by t = 0.03 s"
+# A stage solve that does not converge stops the run (exit 3) and says so.
+# shellcheck disable=SC2086
+expect 3 "did not converge in 3 GMRES iterations" -- "$VESPH" run "$SCENE" -o "$WORK/unconverged" --quiet $STIFF \
+  --set integrator.type=semi-implicit --set integrator.max_linear_iterations=3
 # Keys: max_linear_iterations only for semi-implicit; vesph list shows the integrator.
 expect 2 "max_linear_iterations" -- "$VESPH" check "$SCENE" --set integrator.max_linear_iterations=10
 expect 0 "semi-implicit" -- "$VESPH" list
