@@ -298,6 +298,7 @@ namespace {
 // k = 0.4 (1 + |x_i|^2) per oscillator, no position or density rate in the implicit part.
 struct DampedOscillators final : OdeSystem {
   Oscillators osc{4, 1.3};
+  double damping = 0.4;  // k = damping (1 + |x_i|^2); stiff when damping dt >> 1
   std::size_t size() const override { return osc.size(); }
   StateSegments segments() const override { return osc.segments(); }
   void rhs(double t, const double* y, double* f) override {
@@ -312,7 +313,7 @@ struct DampedOscillators final : OdeSystem {
     const bool diagonal = part == RhsPart::implicit_diagonal;  // d f_I / dv = -k
     for (std::size_t k = 0; k < size(); ++k) f[k] = 0.0;
     for (std::size_t i = 0; i < n; ++i) {
-      const double k = 0.4 * (1.0 + y[D * i] * y[D * i] + y[D * i + 1] * y[D * i + 1]);
+      const double k = damping * (1.0 + y[D * i] * y[D * i] + y[D * i + 1] * y[D * i + 1]);
       for (std::size_t a = 0; a < D; ++a) f[n * (D + 1) + D * i + a] = -k * (diagonal ? 1.0 : y[n * (D + 1) + D * i + a]);
     }
   }
@@ -369,6 +370,114 @@ TEST_CASE("integrators: every IMEX pair in fixed-step mode reaches its nominal o
   }
   // The table names of a pair name the pair.
   CHECK(build("type = \"arkode-imex-fixed\"\nstep = 0.1\ntable = \"ARK436L2SA_DIRK_6_3_4\"\n")->order() == 4);
+}
+
+TEST_CASE("integrators: semi-implicit is second order, with and without a split, and L-stable on stiff damping") {
+  // Without a split (f_I = 0) the implicit half steps are the identity: the midpoint rule's
+  // states, bit for bit, at the same step.
+  checkOrder("semi-implicit", "");
+  {
+    Oscillators a(4, 1.3), b(4, 1.3);
+    std::vector<double> ya = a.initial(), yb = b.initial();
+    auto semi = build("type = \"semi-implicit\"\nstep = 0.05\n");
+    auto midpoint = build("type = \"midpoint\"\nstep = 0.05\n");
+    semi->start(a, 0.0, ya.data());
+    midpoint->start(b, 0.0, yb.data());
+    REQUIRE(semi->advance(2.0));
+    REQUIRE(midpoint->advance(2.0));
+    CHECK(ya == yb);
+    CHECK(semi->stats().steps == midpoint->stats().steps);
+  }
+  // The damped oscillators split as for arkode-imex: second order (Strang splitting of two
+  // second-order sub-steps).
+  auto errorAt = [](double damping, double dt, const std::vector<double>& ref, IntegratorStats* stats = nullptr) {
+    DampedOscillators sys;
+    sys.damping = damping;
+    auto integ = build("type = \"semi-implicit\"\nstep = " + num(dt) + "\nrtol = 1e-12\n");
+    std::vector<double> y = sys.osc.initial();
+    integ->start(sys, 0.0, y.data());
+    REQUIRE(integ->advance(2.0));
+    CHECK(integ->time() == 2.0);
+    CHECK(sys.osc.accepted == integ->stats().steps);
+    if (stats) *stats = integ->stats();
+    double e = 0;
+    for (std::size_t k = 0; k < y.size(); ++k) e = std::max(e, std::abs(y[k] - ref[k]));
+    return e;
+  };
+  const std::vector<double> dts = {0.4, 0.2, 0.1, 0.05, 0.025, 0.0125};
+  {
+    std::vector<double> err;
+    for (double dt : dts) err.push_back(errorAt(0.4, dt, dampedReference()));
+    const double observed = std::log2(err[err.size() - 2] / err.back());
+    MESSAGE("semi-implicit, damped oscillators: observed order " << observed << " (errors " << err[0] << " ... "
+                                                                 << err.back() << ")");
+    CHECK(std::abs(observed - 2) < 0.3);
+  }
+  // Stiff damping (k dt from 12 to 400 at these steps; the explicit limit is dt < 2/k): stable
+  // and converging, but at first order while k dt >> 1 — the splitting's order reduction: the
+  // quasi-steady balance v = -w^2 x / k between the explicit force and the stiff damping is
+  // not kept inside a step (docs/theory.md §9.6). Reference: the same scheme at dt = 1e-4.
+  {
+    const double damping = 1000;
+    DampedOscillators sys;
+    sys.damping = damping;
+    auto fine = build("type = \"semi-implicit\"\nstep = 1e-4\nrtol = 1e-12\n");
+    std::vector<double> ref = sys.osc.initial();
+    fine->start(sys, 0.0, ref.data());
+    REQUIRE(fine->advance(2.0));
+    std::vector<double> err;
+    IntegratorStats stats;
+    for (double dt : dts) err.push_back(errorAt(damping, dt, ref, &stats));
+    const double observed = std::log2(err[err.size() - 2] / err.back());
+    MESSAGE("semi-implicit, stiff damped oscillators: errors " << err[0] << " ... " << err.back()
+                                                               << ", observed order at the finest steps " << observed);
+    for (std::size_t k = 0; k + 1 < err.size(); ++k) CHECK(err[k + 1] < err[k]);
+    CHECK(err.back() < 0.03);
+    CHECK(observed > 0.9);
+    // Per step: 2 explicit evaluations, 1 diagonal, per half step 2 stages of f_I and one
+    // product J w each (the Jacobi preconditioner is exact for this diagonal J); 1 + 1 at the
+    // start (F_E, the first diagonal).
+    CHECK(stats.rhs_evals == 2 + stats.steps * (2 + 1 + 2 * 4));
+  }
+  // L-stability: at k tau = 5e4 one step leaves the velocities at the quasi-steady balance's
+  // size (|v| <= w^2 |x| dt / (k tau)-ish), where Crank-Nicolson would return about -v.
+  {
+    DampedOscillators sys;
+    sys.damping = 1e6;
+    auto integ = build("type = \"semi-implicit\"\nstep = 0.1\n");
+    std::vector<double> y = sys.osc.initial();
+    integ->start(sys, 0.0, y.data());
+    REQUIRE(integ->advance(0.1));
+    const StateSegments seg = sys.segments();
+    double v0 = 0, v1 = 0;
+    for (std::size_t k = seg.velocity_begin; k < seg.velocity_end; ++k) {
+      v0 = std::max(v0, std::abs(sys.osc.initial()[k]));
+      v1 = std::max(v1, std::abs(y[k]));
+    }
+    MESSAGE("semi-implicit, k tau = 5e4: max |v| " << v0 << " -> " << v1 << " in one step");
+    CHECK(v1 < 1e-4 * v0);
+  }
+}
+
+TEST_CASE("integrators: semi-implicit resumes bit-identically from its carried rate") {
+  DampedOscillators sys;
+  const std::string scene = "type = \"semi-implicit\"\nstep = 0.01\n";
+  auto whole = build(scene);
+  std::vector<double> y_whole = sys.osc.initial();
+  whole->start(sys, 0.0, y_whole.data());
+  REQUIRE(whole->advance(0.5));
+  REQUIRE(whole->advance(1.0));
+  auto first = build(scene);
+  std::vector<double> y = sys.osc.initial();
+  first->start(sys, 0.0, y.data());
+  REQUIRE(first->advance(0.5));
+  const std::vector<double> carried = first->carried();
+  CHECK(carried.size() == y.size());
+  auto second = build(scene);
+  second->start(sys, 0.5, y.data());
+  second->restoreCarried(carried);
+  REQUIRE(second->advance(1.0));
+  CHECK(y == y_whole);
 }
 
 TEST_CASE("integrators: adaptive IMEX ARKODE meets its tolerance") {
@@ -578,4 +687,55 @@ TEST_CASE("integrators: arkode-imex matches an explicit run: UCM") {
 }
 TEST_CASE("integrators: arkode-imex matches an explicit run: XPP") {
   checkImexMatchesExplicit("startup_channel_xpp", "0.05");
+}
+
+namespace {
+
+// Every constitutive model under 'semi-implicit' against the leapfrog (itself within 5e-5 of
+// an arkode run at rtol 1e-6 on these cases): the velocities and elastic stresses agree to
+// 1e-3 of their largest value. Measured at the ends below (largest of velocities, stresses):
+// Newtonian 3.6e-4, second-order fluid 2.3e-5, Oldroyd-B 1.9e-4, UCM 6e-5, XPP 1.5e-5 — the
+// splitting's error in the wall layer (docs/theory.md §9.6).
+void checkSemiImplicitMatchesLeapfrog(const std::string& scene, const std::string& end) {
+  CAPTURE(scene);
+  auto runWith = [&](const std::string& type) {
+    SceneHeader h;
+    Config cfg = loadScene(std::string(VESPH_SOURCE_DIR "/cases/") + scene + ".toml",
+                           {"integrator.type=\"" + type + "\"", "time.end=" + end, "output.times=[" + end + "]"}, h);
+    Simulation<2> sim(cfg, h);
+    const RunReport r = sim.run(RunOptions{"", true, false, 0});
+    REQUIRE(r.status == RunStatus::ok);
+    return std::make_pair(sim.state(), sim.system().segments());
+  };
+  const auto [a, seg] = runWith("leapfrog");
+  const std::vector<double> b = runWith("semi-implicit").first;
+  REQUIRE(a.size() == b.size());
+  const std::size_t bounds[] = {seg.velocity_begin, seg.velocity_end, a.size()};
+  for (int s = 0; s < 2; ++s) {
+    double scale = 0, diff = 0;
+    for (std::size_t k = bounds[s]; k < bounds[s + 1]; ++k) {
+      scale = std::max(scale, std::abs(a[k]));
+      diff = std::max(diff, std::abs(a[k] - b[k]));
+    }
+    MESSAGE(scene << std::string(s ? " stresses" : " velocities") << ": max difference " << diff << " of " << scale);
+    CHECK(diff <= 1e-3 * scale);
+  }
+}
+
+}  // namespace
+
+TEST_CASE("integrators: semi-implicit matches the leapfrog: Newtonian") {
+  checkSemiImplicitMatchesLeapfrog("poiseuille_newtonian", "0.05");
+}
+TEST_CASE("integrators: semi-implicit matches the leapfrog: second-order fluid") {
+  checkSemiImplicitMatchesLeapfrog("startup_channel_second_order_fluid", "0.00025");
+}
+TEST_CASE("integrators: semi-implicit matches the leapfrog: Oldroyd-B") {
+  checkSemiImplicitMatchesLeapfrog("startup_channel_oldroyd_b", "0.05");
+}
+TEST_CASE("integrators: semi-implicit matches the leapfrog: UCM") {
+  checkSemiImplicitMatchesLeapfrog("startup_channel_ucm", "0.05");
+}
+TEST_CASE("integrators: semi-implicit matches the leapfrog: XPP") {
+  checkSemiImplicitMatchesLeapfrog("startup_channel_xpp", "0.05");
 }

@@ -1,6 +1,8 @@
 #pragma once
 // Shared driver of the fixed-step predictor-correctors: the step is the smallest stability
 // limit at the current state, shortened to land exactly on the requested output time.
+// The carried rate is F = the full right-hand side, or for the semi-implicit splitting
+// (src/time/semi_implicit.cpp) its explicit part f_E, whose limits alone then set the step.
 #include <algorithm>
 #include <cmath>
 #include <vector>
@@ -12,7 +14,8 @@ namespace vesph {
 
 class FixedStepIntegrator : public Integrator {
  public:
-  explicit FixedStepIntegrator(const StepControl& c) : control_(c) {}
+  explicit FixedStepIntegrator(const StepControl& c, RhsPart rate_part = RhsPart::full)
+      : control_(c), rate_part_(rate_part) {}
 
   void start(OdeSystem& system, double t0, double* y) override {
     sys_ = &system;
@@ -21,17 +24,17 @@ class FixedStepIntegrator : public Integrator {
     n_ = system.size();
     rate_.assign(n_, 0.0);
     work_.assign(n_, 0.0);
-    sys_->rhs(t_, y_, rate_.data());  // F^0, also fills the stability snapshot
-    ++stats_.rhs_evals;
+    allocate();
+    evaluate(t_, y_, rate_.data());  // F^0, also fills the stability snapshot
   }
 
   StepLimits limits() const override {
-    return sys_ && control_.fixed_step == 0 ? stepLimits(sys_->stability(), control_) : StepLimits{};
+    return sys_ && control_.fixed_step == 0 ? stepLimits(stabilityInputs(), control_) : StepLimits{};
   }
 
   bool advance(double tout) override {
     while (t_ < tout) {
-      double dt = control_.fixed_step > 0 ? control_.fixed_step : stepLimits(sys_->stability(), control_).smallest();
+      double dt = control_.fixed_step > 0 ? control_.fixed_step : stepLimits(stabilityInputs(), control_).smallest();
       if (!std::isfinite(dt))
         throw InputError("integrator: no stability limit bounds the time step (no sound speed, viscosity, "
                          "motion or force); set integrator.max_step (s)");
@@ -50,6 +53,7 @@ class FixedStepIntegrator : public Integrator {
         n_ = sys_->size();
         rate_.assign(n_, 0.0);
         work_.assign(n_, 0.0);
+        allocate();
         evaluate(t_, y_, rate_.data());
       } else if (sys_->afterStepChangesState()) {
         evaluate(t_, y_, rate_.data());  // F at the projected state
@@ -70,13 +74,22 @@ class FixedStepIntegrator : public Integrator {
  protected:
   // Advances y_ by dt; on entry rate_ holds F(t_, y_); on exit it must hold F at the new state.
   virtual void step(double dt) = 0;
+  // Sizes the integrator's own buffers for a state of n_ values (at start and after a resize).
+  virtual void allocate() {}
 
+  // The carried rate's evaluation: F, or f_E for the semi-implicit splitting.
   void evaluate(double t, const double* y, double* f) {
-    sys_->rhs(t, y, f);
+    if (rate_part_ == RhsPart::full) sys_->rhs(t, y, f);
+    else sys_->rhsPart(rate_part_, t, y, f);
     ++stats_.rhs_evals;
+  }
+  // The stability inputs of the carried rate's last evaluation.
+  StabilitySnapshot stabilityInputs() const {
+    return rate_part_ == RhsPart::full ? sys_->stability() : sys_->explicitStability();
   }
 
   StepControl control_;
+  RhsPart rate_part_;
   OdeSystem* sys_ = nullptr;
   double* y_ = nullptr;
   std::size_t n_ = 0;

@@ -26,6 +26,7 @@ std::unique_ptr<Integrator> makeArkodeFixed(ConfigTable&, const StepControl&, co
 std::unique_ptr<Integrator> makeSymplectic(ConfigTable&, const StepControl&, const ReferenceScales&);
 std::unique_ptr<Integrator> makeArkodeImex(ConfigTable&, const StepControl&, const ReferenceScales&);
 std::unique_ptr<Integrator> makeArkodeImexFixed(ConfigTable&, const StepControl&, const ReferenceScales&);
+std::unique_ptr<Integrator> makeSemiImplicit(ConfigTable&, const StepControl&, const ReferenceScales&);
 
 const std::vector<IntegratorEntry>& integratorRegistry() {
   static const std::vector<IntegratorEntry> registry = {
@@ -36,6 +37,7 @@ const std::vector<IntegratorEntry>& integratorRegistry() {
       {"symplectic", "symplectic position Verlet (drift-kick-drift), one evaluation per step (the last midpoint rates predict the next midpoint); fixed step from the stability limits; 2nd order", &makeSymplectic, false, kSymplecticWcsphDefaultCfl},
       {"arkode-imex", "SUNDIALS ARKODE ARKStep, adaptive error-controlled implicit-explicit Runge-Kutta (integrator.table: ARK324L2SA ...); viscous force and Oldroyd-B/UCM relaxation implicit (Newton, matrix-free GMRES), step bounded by the explicit part's limits only", &makeArkodeImex, true},
       {"arkode-imex-fixed", "SUNDIALS ARKODE ARKStep implicit-explicit in fixed-step mode (integrator.table); step from the explicit part's limits or integrator.step", &makeArkodeImexFixed},
+      {"semi-implicit", "Strang splitting of arkode-imex's f_E + f_I: half an L-stable SDIRK step of the implicit part (matrix-free GMRES, integrator.rtol), a midpoint step of the explicit part, half an implicit step; fixed step from the explicit part's limits or integrator.step; 2nd order", &makeSemiImplicit},
   };
   return registry;
 }
