@@ -1,6 +1,7 @@
 """study_imex_work_precision (vesph.studies.imex_work_precision): the --quick study on the two
 channels runs every series and writes the CSV and the PNG, arkode-imex's step exceeds the
-explicit viscous limit while the leapfrog and the midpoint sit at it; the die's scene; the
+explicit viscous limit while the leapfrog and the midpoint sit at it, --plot-only redraws the
+PNG from the CSV; the die's scene; the
 reference error matched by particle id when particles enter and leave. Needs the vesph binary
 (VESPH, default build/vesph); the quick study takes a few seconds."""
 import math
@@ -55,6 +56,14 @@ def make_imex_work_precision_tests(tmp):
             imex_adaptive = [r for r in crs if r["integrator"] == "arkode-imex"]
             expect(all(r["control"] in ("limit", "error") for r in imex_adaptive),
                    f"{case}: IMEX control {[r['control'] for r in imex_adaptive]}")
+        # --plot-only redraws the PNG from the CSV without running vesph
+        png = os.path.join(out, "imex_work_precision.png")
+        os.remove(png)
+        p = subprocess.run([os.path.join(TOOLS, "vesph-post"), "study_imex_work_precision",
+                            "--quick", "--case", "poiseuille", "oldroyd_b", "--out", out,
+                            "--plot-only", "--vesph", "/nonexistent/vesph"], capture_output=True, text=True)
+        expect(p.returncode == 0 and os.path.getsize(png) > 0, f"--plot-only: exit {p.returncode}",
+               p.stdout + p.stderr)
 
     def die_scene():
         s = iwp.die_scene(500.0)

@@ -5,7 +5,7 @@ viscous limit binds.
 Usage
 -----
     tools/vesph-post study_imex_work_precision [--case NAME ...] [--out DIR] [--quick]
-        [--threads N] [--vesph BIN] [--keep-runs DIR]
+        [--threads N] [--vesph BIN] [--keep-runs DIR] [--plot-only]
 
 Cases (--case, default all; docs/studies.md section 6):
   poiseuille   the Poiseuille start-up (cases/poiseuille_newtonian.toml, H/40) at 100 times
@@ -63,7 +63,7 @@ Writes DIR/imex_work_precision.csv, DIR/imex_work_precision.png (one panel per c
 against the reference vs wall time, one series per integrator; points whose step the stability
 limit sets drawn hollow; the analytic error of the reference, i.e. the spatial error, as a
 dashed line), DIR/commands.txt (every vesph command), DIR/scenes/ (the die scenes), and
-prints the table.
+prints the table.  --plot-only redraws the PNG from DIR's CSV without running vesph.
 --quick: tiny versions for the tests (seconds for the channels): H/10 channels over 20
 viscous-limit steps, the die over 0.2 ms, one or two runs per integrator.
 
@@ -349,6 +349,23 @@ def row_for(case, run, series, kind, table, step, rtol):
     return row
 
 
+def read_rows(path):
+    """The rows of a CSV this study wrote, with numbers as numbers (empty: NaN or None)."""
+    import csv
+    numeric = {k for k, _, spec in COLUMNS if spec != "s"}
+    rows = []
+    with open(path, newline="") as fh:
+        for raw in csv.DictReader(fh):
+            row = {}
+            for k, v in raw.items():
+                if k in numeric:
+                    row[k] = (None if k in ("step", "rtol") else math.nan) if v == "" else float(v)
+                else:
+                    row[k] = v
+            rows.append(row)
+    return rows
+
+
 def has_semi_implicit(vesph):
     return any(i.get("name") == "semi-implicit" for i in catalogue(vesph).get("integrators", []))
 
@@ -359,7 +376,17 @@ def main(argv=None):
     sc.common_arguments(ap, STUDY)
     ap.add_argument("--case", nargs="+", choices=CASES, default=list(CASES),
                     help="cases to run (default all)")
+    ap.add_argument("--plot-only", action="store_true",
+                    help="redraw DIR/imex_work_precision.png from DIR/imex_work_precision.csv "
+                         "(the cases given, with the same --quick) without running vesph")
     a = ap.parse_args(argv)
+    if a.plot_only:
+        rows = read_rows(Path(a.out) / f"{STUDY}.csv")
+        cases = [make_case(n, a.quick, a.out) for n in a.case]
+        cases = [c for c in cases if any(r["case"] == c.name for r in rows)]
+        plot(Path(a.out) / f"{STUDY}.png", rows, cases)
+        print(f"wrote {Path(a.out) / (STUDY + '.png')}")
+        return 0
     runner = sc.Runner(a, STUDY)
     semi = has_semi_implicit(a.vesph)
     print(f"# {STUDY}: cases {', '.join(a.case)}; OMP_NUM_THREADS={a.threads}; semi-implicit "
@@ -421,16 +448,15 @@ def plot(path, rows, cases):
         if ref:
             ax.axhline(ref[0]["err_analytic"], color="grey", ls="--", lw=0.8,
                        label="spatial error (reference vs analytic)")
-        unstable = [r["series"] for r in crs if r["status"] == "unstable"]
-        if unstable:
-            ax.text(0.02, 0.02, "unstable: " + ", ".join(sorted(set(unstable))),
-                    transform=ax.transAxes, fontsize=6)
+        unstable = sorted({f"{r['series']} at {r['step']:.3g} s" for r in crs
+                           if r["status"] == "unstable"})
         ax.set_xscale("log")
         ax.set_yscale("log")
         ax.grid(True, which="both", alpha=0.25)
         ax.set_xlabel("wall time [s] (one thread)")
         ax.set_ylabel("max |v - v_ref| / U")
-        ax.set_title(f"{case.title}, t = {case.t_end:g} s", fontsize=8)
+        ax.set_title(f"{case.title}, t = {case.t_end:g} s"
+                     + ("\nunstable: " + "; ".join(unstable) if unstable else ""), fontsize=7.5)
         ax.legend(loc="best", fontsize=5.5)
     for ax in list(axes.flat)[n:]:
         ax.set_visible(False)
