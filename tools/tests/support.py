@@ -29,6 +29,7 @@ What each module checks is in its docstring:
     test_measure_die_swell.py   die_swell_measure, die_swell_lip
     test_measure_dam_break.py   dam_break_front, Output.gauges()
     test_studies.py             die_swell_study
+    test_imex_work_precision.py study_imex_work_precision (runs vesph: the --quick study)
 """
 
 import argparse

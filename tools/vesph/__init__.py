@@ -47,6 +47,7 @@ TOOL_MODULES = {
     "study_cfl": "vesph.studies.cfl",
     "study_sound_speed": "vesph.studies.sound_speed",
     "study_convergence": "vesph.studies.convergence",
+    "study_imex_work_precision": "vesph.studies.imex_work_precision",
     "die_swell_study": "vesph.studies.die_swell",
     "isph_bench": "vesph.studies.isph_bench",
     "bench_3d": "vesph.studies.bench_3d",

@@ -5,6 +5,7 @@ Not a command: imported by
     vesph.studies.cfl              step-limit coefficients up to instability  (tools/study_cfl.py)
     vesph.studies.sound_speed      the density-variation parameter delta  (tools/study_sound_speed.py)
     vesph.studies.convergence      spatial and temporal orders  (tools/study_convergence.py)
+    vesph.studies.imex_work_precision  arkode-imex on stiff cases  (tools/vesph-post study_imex_work_precision)
 
 Every study runs the plane-Poiseuille start-up case (cases/poiseuille_newtonian.toml,
 theory.md section 10) with `--set` overrides, one `vesph run` at a time, each in its own
@@ -147,6 +148,7 @@ class FluidFrame:
     vx: np.ndarray
     rho: np.ndarray
     x: np.ndarray = None  # first coordinate (the scene sweep's extent of the fluid)
+    vy: np.ndarray = None  # second velocity component (2D flows that are not along x)
 
 
 @dataclass
@@ -244,7 +246,7 @@ def read_output(run, directory):
             run.frames.append(FluidFrame(
                 time=t, ids=ids[order], y=g["position"][fl, 1][order],
                 vx=g["velocity"][fl, 0][order], rho=g["density"][fl][order],
-                x=g["position"][fl, 0][order]))
+                x=g["position"][fl, 0][order], vy=g["velocity"][fl, 1][order]))
         if "diagnostics" in out.f:
             run.diag_time, run.diag_max_speed = out.diagnostics("time", "max_speed")
 
@@ -382,10 +384,11 @@ def density_deviation_at(run, t):
     return float(np.max(np.abs(fr.rho - rho0))) / rho0
 
 
-def step_control(run, cfl=None, viscous=None, rtol=1e-3, vesph=None):
-    """How the accepted steps of an (adaptive) run relate to the stability limit
-    min(cfl h/(c + v_max), viscous h^2/nu) of each step.  Returns
-    (at_limit, ratio, control):
+def step_control(run, cfl=None, viscous=None, rtol=1e-3, vesph=None, nu=None, scheme="wcsph",
+                 elastic_speed=0.0, implicit_viscous=False, relaxation_time=None):
+    """How the accepted steps of an (adaptive) run relate to the stability limit of each step,
+    min(cfl h/(c + c_e + v_max), viscous h^2/nu, relaxation_coefficient lambda) (theory.md
+    section 8; the force limit is not included).  Returns (at_limit, ratio, control):
       at_limit  fraction of steps within rtol of the limit,
       ratio     median of step / limit,
       control   "limit"  when at_limit >= 0.5 (the stability limit sets the step);
@@ -397,18 +400,34 @@ def step_control(run, cfl=None, viscous=None, rtol=1e-3, vesph=None):
                          bounds to [1, 1] since commit ac193f7: "held" now flags a regression;
                 "error"  otherwise (the error estimate sets the step).
     The first and the last step (start-up, landing on the end time) are not counted; a
-    coefficient not given is vesph's default (vesph.limits)."""
+    coefficient not given is vesph's default (vesph.limits) for the pressure scheme.
+    nu: the kinematic viscosity of the viscous limit (default: the Poiseuille scene's).
+    scheme "isph": no sound speed, the advective limit cfl h/v_max with the ISPH cfl.
+    elastic_speed: c_e of a viscoelastic model in the acoustic limit; relaxation_time: lambda
+    of a model whose relaxation is explicit (the relaxation limit).  implicit_viscous: the
+    viscous term is integrated implicitly (arkode-imex), so the viscous limit does not apply
+    and the limit is that of the explicit part (docs/theory.md section 9.5)."""
     dts = run.step_sizes()
     if len(dts) < 4 or not math.isfinite(run.h):
         return math.nan, math.nan, ""
-    c = run.sound_speed if math.isfinite(run.sound_speed) else 0.0
-    nu = velocity_scale(run)[2]
-    defaults = limits.default_coefficients(vesph=vesph)
+    defaults = limits.default_coefficients(scheme, vesph=vesph)
     cfl = defaults["cfl"] if cfl is None else cfl
     viscous = defaults["viscous"] if viscous is None else viscous
     vprev = np.concatenate([[0.0], run.diag_max_speed[:-1]])
-    acoustic = cfl * run.h / (c + vprev) if c > 0 else np.full(len(dts), np.inf)
-    lim = np.minimum(acoustic, viscous * run.h ** 2 / nu)
+    if scheme == "isph":
+        with np.errstate(divide="ignore"):
+            acoustic = np.where(vprev > 0, cfl * run.h / np.maximum(vprev, 1e-300), np.inf)
+    else:
+        c = run.sound_speed if math.isfinite(run.sound_speed) else 0.0
+        c += elastic_speed
+        acoustic = cfl * run.h / (c + vprev) if c > 0 else np.full(len(dts), np.inf)
+    lim = acoustic
+    if not implicit_viscous:
+        nu = velocity_scale(run)[2] if nu is None else nu
+        if nu > 0:
+            lim = np.minimum(lim, viscous * run.h ** 2 / nu)
+    if relaxation_time:
+        lim = np.minimum(lim, defaults["relaxation"] * relaxation_time)
     body, limb = dts[1:-1], lim[1:-1]
     at = float(np.mean(body >= (1.0 - rtol) * limb))
     ratio = float(np.median(body / limb))
