@@ -65,20 +65,7 @@ class Midpoint final : public FixedStepIntegrator {
   int order() const override { return 2; }
 
  protected:
-  void step(double dt) override {
-    double* y = y_;
-    double* f = rate_.data();
-    std::vector<double>& y0 = work_;
-#pragma omp parallel for schedule(static) if (n_ >= kParallelMinimumValues)
-    for (std::size_t k = 0; k < n_; ++k) {
-      y0[k] = y[k];
-      y[k] += 0.5 * dt * f[k];
-    }
-    evaluate(t_ + 0.5 * dt, y, f);
-#pragma omp parallel for schedule(static) if (n_ >= kParallelMinimumValues)
-    for (std::size_t k = 0; k < n_; ++k) y[k] = y0[k] + dt * f[k];
-    evaluate(t_ + dt, y, f);
-  }
+  void step(double dt) override { midpointStep(dt); }
 };
 
 }  // namespace

@@ -74,28 +74,12 @@ class SemiImplicit final : public FixedStepIntegrator {
     // unless a hook changed the state since or the buffers are new (start, resize).
     if (!diagonal_valid_ || sys_->afterStepChangesState()) refreshDiagonal(t_);
     implicitHalfStep(t_, 0.5 * dt);
-    explicitMidpoint(dt);
+    midpointStep(dt);  // S_E(dt) on the carried f_E
     refreshDiagonal(t_ + dt);
     implicitHalfStep(t_ + 0.5 * dt, 0.5 * dt);
   }
 
  private:
-  // S_E(dt): X^{n+1/2} = X^n + dt/2 F_E, X^{n+1} = X^n + dt F_E^{n+1/2}, then F_E^{n+1}.
-  void explicitMidpoint(double dt) {
-    double* y = y_;
-    double* f = rate_.data();
-    std::vector<double>& y0 = work_;
-#pragma omp parallel for schedule(static) if (n_ >= kParallelMinimumValues)
-    for (std::size_t k = 0; k < n_; ++k) {
-      y0[k] = y[k];
-      y[k] += 0.5 * dt * f[k];
-    }
-    evaluate(t_ + 0.5 * dt, y, f);
-#pragma omp parallel for schedule(static) if (n_ >= kParallelMinimumValues)
-    for (std::size_t k = 0; k < n_; ++k) y[k] = y0[k] + dt * f[k];
-    evaluate(t_ + dt, y, f);
-  }
-
   void evaluatePart(RhsPart part, double t, const double* y, double* f) {
     sys_->rhsPart(part, t, y, f);
     ++stats_.rhs_evals;
