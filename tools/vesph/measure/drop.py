@@ -10,6 +10,7 @@ Usage
         [--contact 1.5] [--wall-y Y] [--until T]
         [--max-volume-error E] [--no-fracture | --expect-fracture] [--max-gap 2.5]
         [--crack-radius 3] [--max-crack 0.05] [--max-nn-gap G]
+        [--time-offset T0] [--speed V] [--min-spread S] [--expect-retraction F]
 
 The scene
 ---------
@@ -18,6 +19,9 @@ shape = "disk" (2D) or "sphere" (3D): its diameter D and velocity; V = |velocity
 vertical component; it must not be 0). The wall position y_w is the top (max[1]) of the
 highest wall block lying below the drop (y = 0 in cases/drop_*.toml); --wall-y overrides it.
 dx is the root attribute ``dx`` (else particles.spacing). Time is reported as t V/D.
+--speed V replaces V and --time-offset T0 (s) is added to the file's times: a run that starts
+the drop part-way through its fall (cases/drop_3d_*.toml: a drop in free fall without surface
+tension does not deform) is reported on the clock of the release at speed V.
 
 Per frame (fluid particles, kind 0)
 -----------------------------------
@@ -27,6 +31,10 @@ Per frame (fluid particles, kind 0)
   Particles that the rim leaves behind on the wall as it retracts (or droplets flung off) keep
   the width of all fluid at the farthest point ever reached; the bulk width retracts with the
   drop.
+- spread: twice the largest horizontal distance of a particle of the largest cluster from the
+  drop's vertical axis (the block's centre; 2D |x - x_c|, 3D the distance in the x-z plane):
+  the diameter of the drop's footprint in 3D, where the width along x alone would miss the
+  spread along z.
 - contact width: max x - min x of the fluid particles with y - y_w <= --contact dx (default
   1.5 dx: the first particle row on the wall sits at y_w + dx/2); 0 with fewer than 2 such
   particles; n_contact counts them.
@@ -78,7 +86,11 @@ Checks (each optional; exit 1 when one fails)
 --max-volume-error E  every checked frame has |V/V_first - 1| <= E;
 --no-fracture         no checked frame is fractured;
 --expect-fracture     at least one checked frame is fractured;
---until T             only frames with t V/D <= T are measured and checked.
+--until T             only frames with t V/D <= T are measured and checked;
+--min-spread S        the largest spread / D over the checked frames is at least S;
+--expect-retraction F the spread falls after its maximum: the smallest spread of the later
+                      frames is at most (1 - F) times the maximum (the viscoelastic drop's
+                      retraction, Fang et al. 2006 Figs. 3-8).
 
 Outputs
 -------
@@ -91,7 +103,8 @@ with prefix defaulting to "compare". The label is the scene name; a name shared 
 runs gets the file's directory name appended (name_dir), and then _2, _3, ... if needed.
 A summary table is printed for every run. --pictures T1,T2,... also writes
 <prefix>_frames.png: the fluid particles of the frames nearest to those t V/D (a row per
-time, a column per run; x / D from the drop's centre line, y / D above the wall).
+time, a column per run; x / D from the drop's centre line, y / D above the wall; in 3D the
+particles of the section |z - z_c| <= 0.6 dx through the drop's axis).
 
 Exit status: 0 when all requested checks pass; 1 when a check fails or a file cannot be used
 (missing, not HDF5, not a vesph output, no disk fluid block, no frames); 2 for usage errors.
@@ -287,6 +300,7 @@ def interior_density(drop, pos, pos_all, m_all, to_open, grid):
 def measure(drop, a):
     """Rows (dicts) for the frames with t V/D <= a.until (all without --until)."""
     dx, D, V = drop.dx, drop.D, drop.V
+    t0 = a.time_offset
     first = drop.read_fluid(0)
     if first is None:
         raise ToolError(f"{drop.path}: the first frame cannot be read")
@@ -294,10 +308,11 @@ def measure(drop, a):
     drop.vol_first, drop.t_first = vol_first, drop.frames[0][1]
     rows = []
     # --pictures: the frame nearest to each requested t V/D (one picture per time)
-    times = np.array([t * V / D for _, t in drop.frames])
+    times = np.array([(t + t0) * V / D for _, t in drop.frames])
     picture_frames = {int(np.argmin(np.abs(times - want))) for want in (a.pictures or [])}
     drop.pictures = {}
     for k, (nm, t) in enumerate(drop.frames):
+        t = t + t0
         tvd = t * V / D
         if a.until is not None and tvd > a.until + 1e-9 * max(1.0, abs(a.until)):
             break
@@ -316,6 +331,9 @@ def measure(drop, a):
         ncl, ndet, big, nfrag, in_largest = clusters(pos, a.link * dx, a.min_cluster, a.min_fragment)
         xb = x[in_largest]
         bulk = float(xb.max() - xb.min())
+        across = [0] if drop.dim == 2 else [0, 2]  # the horizontal axes
+        horizontal = pos[in_largest][:, across] - np.array(drop.centre)[across]
+        spread = 2.0 * float(np.sqrt(np.max(np.sum(horizontal ** 2, axis=1))))
         nn = max_nn_gap(pos) / dx
         gm = grid_measures(pos, dx, a.link, a.crack_radius)
         vg = gm["void_gap"] / dx
@@ -331,6 +349,7 @@ def measure(drop, a):
             "frame": nm, "time_s": t, "tV_D": tvd,
             "width_m": width, "width_D": width / D,
             "bulk_width_m": bulk, "bulk_width_D": bulk / D,
+            "spread_m": spread, "spread_D": spread / D,
             "contact_width_m": cw, "contact_width_D": cw / D, "n_contact": nc,
             "height_m": height, "height_D": height / D,
             "volume": vol, "volume_rel_err_first": vol / vol_first - 1.0,
@@ -350,6 +369,7 @@ COLUMNS = [  # (key, csv header; {vol} is replaced by volume_m2 / volume_m3)
     ("frame", "frame"), ("time_s", "time_s"), ("tV_D", "tV_over_D"),
     ("width_m", "width_m"), ("width_D", "width_over_D"),
     ("bulk_width_m", "bulk_width_m"), ("bulk_width_D", "bulk_width_over_D"),
+    ("spread_m", "spread_m"), ("spread_D", "spread_over_D"),
     ("contact_width_m", "contact_width_m"), ("contact_width_D", "contact_width_over_D"),
     ("n_contact", "n_contact"), ("height_m", "height_m"), ("height_D", "height_over_D"),
     ("volume", "{vol}"), ("volume_rel_err_first", "volume_rel_err_first"),
@@ -388,6 +408,8 @@ def plot(png, runs, a, title):
         axs[0].plot(t, col("width_D"), "-", color=c, label=f"{label}: all fluid")
         axs[0].plot(t, col("bulk_width_D"), ":", color=c, label=f"{label}: largest cluster")
         axs[0].plot(t, col("contact_width_D"), "--", color=c, label=f"{label}: contact")
+        if a.dim == 3:
+            axs[0].plot(t, col("spread_D"), "-.", color=c, label=f"{label}: spread (x-z)")
         axs[1].plot(t, col("height_D"), "-", color=c, label=label)
         axs[2].plot(t, [100 * v for v in col("volume_rel_err_first")], "-", color=c,
                     label=f"{label}: vs first frame")
@@ -456,6 +478,8 @@ def plot_pictures(png, runs, a):
                 ax.axis("off")
                 continue
             tvd, pos = pics[r]
+            if d.dim == 3:  # the section through the drop's axis
+                pos = pos[np.abs(pos[:, 2] - d.centre[2]) <= 0.6 * d.dx]
             ax.scatter((pos[:, 0] - d.centre[0]) / d.D, (pos[:, 1] - d.wall_y) / d.D, s=size,
                        c="tab:blue", linewidths=0)
             ax.axhline(0.0, color="0.4", lw=0.8)
@@ -474,7 +498,9 @@ def summarize(drop, rows, a, p):
     p(f"== {drop.name}: {drop.path}")
     for n in drop.notes:
         p("note: " + n)
-    p(f"   {drop.dim}D, D = {drop.D:g} m, V = {drop.V:g} m/s (velocity[1] of the disk block), "
+    p(f"   {drop.dim}D, D = {drop.D:g} m, V = {drop.V:g} m/s ("
+      + ("--speed" if a.speed is not None else "velocity[1] of the disk block")
+      + (f"; times + {a.time_offset:g} s" if a.time_offset else "") + "), "
       f"D/V = {drop.D / drop.V:g} s, dx = {drop.dx:g} m (D/dx = {drop.D / drop.dx:g}), "
       f"wall y_w = {drop.wall_y:g} m ({drop.wall_note})")
     p(f"   first-frame volume {drop.vol_first:.6g} {'m^2' if drop.dim == 2 else 'm^3'} at "
@@ -487,12 +513,12 @@ def summarize(drop, rows, a, p):
       f" ... {rows[-1]['tV_D']:.4g}" + (f" (--until {a.until:g})" if a.until is not None else ""))
     step = max(1, math.ceil(len(rows) / 16))
     show = sorted(set(range(0, len(rows), step)) | {len(rows) - 1})
-    p(f"   {'tV/D':>6} {'width/D':>8} {'bulk/D':>7} {'contact/D':>9} {'height/D':>8} {'dV_first%':>9} "
+    p(f"   {'tV/D':>6} {'width/D':>8} {'bulk/D':>7} {'spread/D':>8} {'contact/D':>9} {'height/D':>8} {'dV_first%':>9} "
       f"{'dV_disk%':>8} {'clusters':>8} {'detached':>8} {'largest':>7} {'NN gap':>7} "
       f"{'void':>6} {'void%':>6} {'crack%':>6} {'frac':>4}")
     for j in show:
         r = rows[j]
-        p(f"   {r['tV_D']:6.3f} {r['width_D']:8.4f} {r['bulk_width_D']:7.4f} {r['contact_width_D']:9.4f} "
+        p(f"   {r['tV_D']:6.3f} {r['width_D']:8.4f} {r['bulk_width_D']:7.4f} {r['spread_D']:8.4f} {r['contact_width_D']:9.4f} "
           f"{r['height_D']:8.4f} {100 * r['volume_rel_err_first']:9.3f} "
           f"{100 * r['volume_rel_err_disk']:8.3f} {r['clusters']:8d} {r['detached']:8d} "
           f"{r['largest_cluster_fraction']:7.4f} {r['max_nn_gap_dx']:7.3f} "
@@ -506,6 +532,11 @@ def summarize(drop, rows, a, p):
     p("   first wall contact: " + (f"t V/D = {contact[0]['tV_D']:.4g}" if contact else "none")
       + f"; max width/D {rows[jw]['width_D']:.4g} at t V/D = {rows[jw]['tV_D']:.4g}; "
       f"last height/D {rows[-1]['height_D']:.4g}")
+    js, smin = spread_extremes(rows)
+    p(f"   max spread/D {rows[js]['spread_D']:.4g} at t V/D = {rows[js]['tV_D']:.4g}; "
+      + (f"smallest after it {smin['spread_D']:.4g} at t V/D = {smin['tV_D']:.4g} "
+         f"(retraction {100 * (1 - smin['spread_D'] / rows[js]['spread_D']):.3g} %)"
+         if smin is not None else "no later frame"))
     ve = max(abs(r["volume_rel_err_first"]) for r in rows)
     vd = max(abs(r["volume_rel_err_disk"]) for r in rows)
     p(f"   max |volume error|: {100 * ve:.4g} % vs the first frame, {100 * vd:.4g} % vs the disk")
@@ -526,6 +557,13 @@ def summarize(drop, rows, a, p):
          if frac else ""))
 
 
+def spread_extremes(rows):
+    """(index of the largest spread, the row of the smallest spread after it or None)."""
+    js = int(np.argmax([r["spread_D"] for r in rows]))
+    later = rows[js + 1:]
+    return js, (min(later, key=lambda r: r["spread_D"]) if later else None)
+
+
 def why_fractured(r, a):
     """The criteria a fractured row meets, as text."""
     why = []
@@ -544,7 +582,7 @@ def checks(drop, rows, a, p):
     """Print the requested checks; return True when all pass."""
     ok = True
     if not rows:
-        if a.max_volume_error is not None or a.no_fracture or a.expect_fracture:
+        if requested_checks(a):
             p("   FAIL: no frame to check")
             return False
         return True
@@ -570,6 +608,22 @@ def checks(drop, rows, a, p):
             why = why_fractured(r, a)
             p(f"   check no fracture ({crit}): FAIL: {len(frac)} fractured frame(s), first "
               f"at t V/D = {r['tV_D']:.4g} (frame {r['frame']}: {', '.join(why)})")
+    if a.min_spread is not None or a.expect_retraction is not None:
+        js, smin = spread_extremes(rows)
+        top = rows[js]["spread_D"]
+    if a.min_spread is not None:
+        good = top >= a.min_spread
+        ok &= good
+        p(f"   check max spread/D {top:.4g} (t V/D = {rows[js]['tV_D']:.4g}) >= {a.min_spread:g}: "
+          + ("PASS" if good else "FAIL"))
+    if a.expect_retraction is not None:
+        good = smin is not None and smin["spread_D"] <= (1 - a.expect_retraction) * top
+        ok &= good
+        p(f"   check retraction: the spread falls by at least {100 * a.expect_retraction:g} % "
+          f"after its maximum {top:.4g} D: "
+          + (f"smallest later {smin['spread_D']:.4g} D at t V/D = {smin['tV_D']:.4g}: "
+             if smin is not None else "no later frame: ")
+          + ("PASS" if good else "FAIL"))
     if a.expect_fracture:
         good = bool(frac)
         ok &= good
@@ -608,6 +662,8 @@ def run(a, out=sys.stdout):
     try:
         for path in files:
             drops.append(Drop(path, a.wall_y))
+            if a.speed is not None:
+                drops[-1].V = a.speed
         a.dim = drops[0].dim
         all_ok = True
         for d in drops:
@@ -647,9 +703,14 @@ def run(a, out=sys.stdout):
         written.append(png)
     for w in written:
         p(f"wrote {w}")
-    if a.max_volume_error is not None or a.no_fracture or a.expect_fracture:
+    if requested_checks(a):
         p("RESULT: " + ("PASS" if all_ok else "FAIL"))
     return 0 if all_ok else 1
+
+
+def requested_checks(a):
+    return (a.max_volume_error is not None or a.no_fracture or a.expect_fracture
+            or a.min_spread is not None or a.expect_retraction is not None)
 
 
 def picture_times(text):
@@ -711,7 +772,25 @@ def main(argv=None):
     ap.add_argument("--max-nn-gap", type=float, metavar="G",
                     help="also count a max nearest-neighbour gap above G dx as a fracture "
                          "(off by default: it is raised by detached particles)")
+    ap.add_argument("--time-offset", type=float, default=0.0, metavar="T0",
+                    help="added to the file's times [s]: the run started T0 after the release "
+                         "(default 0)")
+    ap.add_argument("--speed", type=float, metavar="V",
+                    help="the release speed V [m/s] for t V/D (default |velocity[1]| of the "
+                         "drop block)")
+    ap.add_argument("--min-spread", type=float, metavar="S",
+                    help="check: the largest spread / D is at least S")
+    ap.add_argument("--expect-retraction", type=float, metavar="F",
+                    help="check: after its maximum the spread falls by at least the fraction F")
     a = ap.parse_args(argv)
+    if not math.isfinite(a.time_offset):
+        ap.error(f"--time-offset must be a finite number, got {a.time_offset:g}")
+    if a.speed is not None and not (math.isfinite(a.speed) and a.speed > 0):
+        ap.error(f"--speed must be a positive number, got {a.speed:g}")
+    if a.expect_retraction is not None and not (0 < a.expect_retraction < 1):
+        ap.error(f"--expect-retraction must be in (0, 1), got {a.expect_retraction:g}")
+    if a.min_spread is not None and not (a.min_spread > 0):
+        ap.error(f"--min-spread must be positive, got {a.min_spread:g}")
     for nm, v, lo in (("--link", a.link, 0), ("--contact", a.contact, 0),
                       ("--max-gap", a.max_gap, 0), ("--crack-radius", a.crack_radius, 0),
                       ("--max-crack", a.max_crack, 0)):
