@@ -88,6 +88,42 @@ def make_drop_tests(tmp):
                f"stranded frame {r1}")
 
     @t
+    def drop_3d_spread_retraction_and_release_clock():
+        # a 3D sphere (R = 4 dx, D = 8 dx), then a one-layer pancake of radius 8 dx in the x-z
+        # plane, then one of radius 6 dx: spread (footprint diameter) 16 dx = 2 D, then 12 dx =
+        # 1.5 D, a retraction of 25 %. --time-offset 0.002 s and --speed 2 m/s put the frames at
+        # t V/D = (t + 0.002) 2/0.008 = 0.5, 1.5, 2.5.
+        sphere, _ = drop_lattice(R=4, centre=(0.0, 0.006, 0.0), dim=3)
+
+        def pancake(R):
+            k = np.arange(-R, R + 1)
+            I, K = np.meshgrid(k, k, indexing="ij")
+            keep = I * I + K * K <= R * R
+            return np.column_stack([I[keep] * dx, np.full(keep.sum(), 0.6 * dx), K[keep] * dx])
+
+        h5 = write_drop(os.path.join(d, "spread3d.h5"),
+                        [(0.0, sphere), (0.004, pancake(8)), (0.008, pancake(6))], dim=3)
+        base = ("--time-offset", "0.002", "--speed", "2")
+        rc, out, err, rows = measure(h5, *base, "--min-spread", "1.9", "--expect-retraction", "0.2")
+        expect(rc == 0 and len(rows) == 3, f"exit {rc}, {len(rows)} rows", out + err)
+        for r, tvd in zip(rows, (0.5, 1.5, 2.5)):
+            expect(near(r["tV_over_D"], tvd), f"tV/D {r['tV_over_D']} != {tvd}")
+        expect(near(rows[0]["spread_over_D"], 1.0) and near(rows[1]["spread_over_D"], 2.0)
+               and near(rows[2]["spread_over_D"], 1.5) and near(rows[1]["spread_m"], 0.016),
+               f"spreads {[r['spread_over_D'] for r in rows]}")
+        expect("retraction 25 %" in out and "check retraction" in out and "RESULT: PASS" in out,
+               "summary", out)
+        rc, out, err, _ = measure(h5, *base, "--min-spread", "2.1")
+        expect(rc == 1 and "check max spread/D 2 (t V/D = 1.5) >= 2.1: FAIL" in out,
+               f"min spread fails: exit {rc}", out + err)
+        rc, out, err, _ = measure(h5, *base, "--expect-retraction", "0.3")
+        expect(rc == 1 and "RESULT: FAIL" in out, f"retraction 25 % < 30 %: exit {rc}", out + err)
+        rc, out, err, _ = measure(h5, "--speed", "0")
+        expect(rc == 2 and "--speed must be a positive number" in err, f"bad speed: exit {rc}", err)
+        rc, out, err, _ = measure(h5, "--expect-retraction", "1.5")
+        expect(rc == 2 and "--expect-retraction must be in (0, 1)" in err, f"exit {rc}", err)
+
+    @t
     def drop_interior_summation_density_sees_compression():
         # the disk squeezed uniformly to 0.99 of its size about its centre, the densities in the
         # file unchanged (as in ISPH): sum m/rho sees nothing, the interior summation density
