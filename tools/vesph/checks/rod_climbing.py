@@ -56,7 +56,8 @@ must exceed --void-limit (default 0.7; a lattice without voids fills about 1).
 The surface-flow reference, printed beside the theory (--reference surface compares with it):
 the same radial balance with the measured azimuthal velocity of the surface particles, v_s(r),
 in place of the Couette profile, rho g h' = rho v_s^2/r - 2 beta gamma_s^2/r with
-gamma_s = r d(v_s/r)/dr. It separates what the floor does to the surface velocity from what it
+gamma_s = r d(v_s/r)/dr (v_s/r interpolated as a power of r between the rod, where it is omega,
+and the annuli), as the same annulus means. It separates what the floor does to the surface velocity from what it
 does otherwise (the meridional circulation it drives, whose normal stresses also move the
 surface).
 
@@ -237,7 +238,7 @@ def measure_frame(g, p, dx):
     speed = np.linalg.norm(vel, axis=1)
     # Filling of the interior: rings 2 dx x 2 dx inside the fluid.
     re = np.arange(a + dx, R - dx + 1e-9 * dx, 2 * dx)
-    depth = float(np.nanmin(column))
+    depth = float(np.nanmedian(column))
     ye = np.arange(dx, depth - 2 * dx + 1e-9 * dx, 2 * dx)
     fill = 1.0
     if len(re) > 1 and len(ye) > 1:
@@ -251,19 +252,28 @@ def measure_frame(g, p, dx):
 
 def surface_flow_profile(edges, v_surf, p, dx):
     """The surface that the radial balance of the theory gives with the measured surface
-    velocity v_s(r) in place of the Couette profile (m, relative to the far band; NaN where an
-    annulus is empty): rho g h' = rho v_s^2/r - 2 beta gamma_s^2/r, gamma_s = r d(v_s/r)/dr
-    (beta's normal stress taken as psi1 = 2 beta, psi2 = 0: exact for Oldroyd-B), integrated by
-    the trapezoidal rule between the annuli's mid radii."""
+    velocity v_s(r) in place of the Couette profile: the annulus means (m, relative to the far
+    band; NaN for an empty annulus) of the h(r) with
+        rho g h' = rho v_s^2/r - 2 beta gamma_s^2/r,  gamma_s = r d(v_s/r)/dr
+    (beta's normal stress taken as psi1 = 2 beta, psi2 = 0: exact for Oldroyd-B). The angular
+    velocity v_s/r is interpolated as a power of r between the rod's (omega, no slip at r = a)
+    and the annuli's mid radii (exact for the potential vortex), on a grid of dx/200."""
     mid = 0.5 * (edges[1:] + edges[:-1])
     ok = np.isfinite(v_surf)
-    rm, vs = mid[ok], v_surf[ok]
-    gamma = rm * np.gradient(vs / rm, rm)
-    slope = (vs * vs / rm - 2 * p["beta"] * gamma * gamma / (p["rho"] * rm)) / p["g"]
-    h = np.concatenate([[0.0], np.cumsum(0.5 * (slope[1:] + slope[:-1]) * np.diff(rm))])
-    full = np.full(len(mid), np.nan)
-    full[ok] = h
-    return full - band_mean(full, edges, *far_band(p, dx))
+    nodes_r = np.concatenate([[p["a"]], mid[ok]])
+    spin = np.concatenate([[abs(p["omega"])], v_surf[ok] / mid[ok]])
+    spin = np.maximum(spin, 1e-9 * abs(p["omega"]))       # a power law needs spin > 0
+    r = np.linspace(p["a"], edges[-1], int(round(200 * (edges[-1] - p["a"]) / dx)) + 1)
+    w = np.exp(np.interp(np.log(r), np.log(nodes_r), np.log(spin)))
+    gamma = r * np.gradient(w, r, edge_order=2)
+    slope = ((w * r) ** 2 / r - 2 * p["beta"] * gamma * gamma / (p["rho"] * r)) / p["g"]
+    h = np.concatenate([[0.0], np.cumsum(0.5 * (slope[1:] + slope[:-1]) * np.diff(r))])
+    means = np.full(len(mid), np.nan)
+    for i in range(len(mid)):
+        sel = (r >= edges[i]) & (r <= edges[i + 1])
+        if ok[i] and sel.sum() > 1:
+            means[i] = float(np.sum(h[sel] * r[sel]) / np.sum(r[sel]))
+    return means - band_mean(means, edges, *far_band(p, dx))
 
 
 def check_file(path, frames_avg=4, tolerance=0.15, steady_tolerance=0.1, void_limit=0.7, report_only=False,
