@@ -21,7 +21,7 @@ annulus is the mean over its sectors of the highest fluid particle's height (a s
 particle lies over dx/2 below the annulus' median is left out: its surface particle has moved
 into the next sector). The surface at the rod is the first annulus, a < r < a + dx; the far
 level is the area-weighted mean over R/2 < r < R - dx (the last annulus is left out: the
-surface particles next to the container's wall sit about dx/5 lower, a wall effect). (The
+surface particles next to the container's wall sit lower, a wall effect). (The
 column height, sum m_i/rho_i over the annulus' area, is no measure of the surface: a particle's
 volume m/rho need not be the space it fills next to a wall, and the first annulus' column does
 not follow its top particles.) The measured rise is
@@ -71,7 +71,7 @@ write dh against omega^2 with the theory's line.
 
 --csv writes the profile of the (last) file (annulus radii, measured, theoretical and
 surface-flow heights relative to the far level, the surface velocity); --png its picture: the particles in the vertical plane through the
-axis (|z| < dx/2), fluid coloured by speed, and h(r) against the theory and the surface-flow
+axis (|z| < dx), fluid coloured by speed, and h(r) against the theory and the surface-flow
 reference.
 
 Exit status 0 pass, 1 fail, 2 usage.
@@ -389,7 +389,7 @@ def _picture(h5, p, dx, edges, prof, hfun, far_th, surface_ref, png):
     k = len(h5.frames) - 1
     g = h5.read(k, ("kind", "position", "velocity"))
     x = g["position"]
-    sl = np.abs(x[:, 2] - p["axis"][1]) < 0.5 * dx
+    sl = np.abs(x[:, 2] - p["axis"][1]) < dx
     fl = sl & (g["kind"] == 0)
     wl = sl & (g["kind"] != 0)
     a, R = p["a"], p["R"]
@@ -401,7 +401,7 @@ def _picture(h5, p, dx, edges, prof, hfun, far_th, surface_ref, png):
     ax.set_aspect("equal")
     ax.set_xlabel("x / a")
     ax.set_ylabel("y / a")
-    ax.set_title(f"{h5.name}: section z = 0, t = {h5.frames[k][1]:g} s")
+    ax.set_title(f"{h5.name}: particles with |z| < dx, t = {h5.frames[k][1]:g} s")
     rr = np.linspace(a, R, 300)
     mid = 0.5 * (edges[1:] + edges[:-1])
     bx.plot(rr / a, (hfun(rr) - far_th) / dx, "k-", label="second-order theory (point values)")
