@@ -35,6 +35,7 @@ TOOL_MODULES = {
     "pipe_check": "vesph.checks.pipe",
     "rotation_check": "vesph.checks.rotating_box",
     "circular_couette_check": "vesph.checks.circular_couette",
+    "rod_climbing_check": "vesph.checks.rod_climbing",
     "hydrostatic_check": "vesph.measure.hydrostatic",
     "inflow_check": "vesph.measure.inflow",
     "drop_measure": "vesph.measure.drop",

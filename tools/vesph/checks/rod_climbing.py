@@ -1,0 +1,504 @@
+#!/usr/bin/python3
+"""Rod climbing (the Weissenberg effect, 3D; docs/validation.md §20): the free-surface height
+around a rotating rod against the second-order theory (Joseph & Fosdick 1973).
+
+Usage
+-----
+    tools/vesph-post rod_climbing_check H5FILE [H5FILE ...] [--frames 4] [--tolerance 0.15]
+        [--steady-tolerance 0.1] [--void-limit 0.7] [--reference couette|surface] [--report-only]
+        [--csv CSV] [--png PNG]
+        [--sweep-csv CSV] [--sweep-png PNG]
+
+The scene (y vertical, gravity along -y): the rod is the wall block of shape "cylinder" with
+an angular_velocity (omega about the vertical axis through axis_point), radius a; the container
+is the wall block of shape "tube" (inner radius R); the fluid a tube a < r < R. g is the
+magnitude of the body force, rho the fluid density; the fluid model from the effects: Newtonian
+(fluid.viscosity only), oldroyd_b (eta_p, lambda) or xpp (eta_p, lambda_0b, alpha).
+
+Measurement (below the particle spacing). The fluid is binned in annuli of width dx about the
+axis, from a to R, each annulus in angular sectors of arc about 2 dx; the surface height of an
+annulus is the mean over its sectors of the highest fluid particle's height (a sector whose top
+particle lies over dx/2 below the annulus' median is left out: its surface particle has moved
+into the next sector). The surface at the rod is the first annulus, a < r < a + dx; the far
+level is the area-weighted mean over R/2 < r < R - dx (the last annulus is left out: the
+surface particles next to the container's wall sit lower, a wall effect). (The
+column height, sum m_i/rho_i over the annulus' area, is no measure of the surface: a particle's
+volume m/rho need not be the space it fills next to a wall, and the first annulus' column does
+not follow its top particles.) The measured rise is
+    dh = h(a .. a + dx) - h(R/2 .. R - dx),
+averaged over the last --frames frames (default 4). The steady state: the mean of those frames
+against the mean of the --frames before them; their difference must be below
+--steady-tolerance (default 10 %) of |reference|.
+
+Reference (the exact steady surface of a second-order fluid in circular Couette flow between
+the rod and the container; docs/validation.md §20). With v(r) = A r + B/r the Couette profile
+of a rod of radius a turning at omega in a container of radius R at rest
+(A = -omega a^2/(R^2 - a^2), B = omega a^2 R^2/(R^2 - a^2)) and the shear rate
+gamma(r) = r d(v/r)/dr = -2B/r^2, the radial momentum balance at the free surface gives
+
+    rho g h'(r) = rho v^2/r - (psi1 + 4 psi2) gamma^2/r,  i.e.
+    h(r) = [A^2 r^2/2 + 2 A B ln r - B^2/(2 r^2)]/g + 2 beta B^2/(rho g r^4) + const,
+
+beta = psi1/2 + 2 psi2 the climbing constant (Newtonian 0; Oldroyd-B eta_p lambda, exact at
+any Wi in this viscometric flow; XPP at low Wi eta_p lambda_0b (1 - 2 alpha), its psi2/psi1 =
+-alpha/2). The theory's dh is the same annulus means of h(r) as the measurement (the profile
+varies like r^-4 across the first annulus). For R -> infinity and the point value at r = a,
+h(a) - h(inf) = omega^2 (2 beta - rho a^2/2)/(rho g) (Joseph & Fosdick), printed beside it. The
+theory has no floor: the container's no-slip floor slows the flow away from the rod and drives
+a meridional circulation (docs/validation.md §20).
+
+Sanity of the run (no blow-up, no voids): the fluid mass unchanged, the fluid volume sum m/rho
+within 5 % of the first frame's, no particle faster than 5 omega a, and the filling of the
+interior: the fluid volume in rings 2 dx x 2 dx (radial x vertical) that lie inside the fluid
+(a + dx < r < R - dx, dx < y < the column height - 2 dx) over the ring's volume; its minimum
+must exceed --void-limit (default 0.7; a lattice without voids fills about 1).
+
+The surface-flow reference, printed beside the theory (--reference surface compares with it):
+the same radial balance with the measured azimuthal velocity of the surface particles, v_s(r),
+in place of the Couette profile, rho g h' = rho v_s^2/r - 2 beta gamma_s^2/r with
+gamma_s = r d(v_s/r)/dr (v_s/r interpolated as a power of r between the rod, where it is omega,
+and the annuli), as the same annulus means. It separates what the floor does to the surface velocity from what it
+does otherwise (the meridional circulation it drives, whose normal stresses also move the
+surface).
+
+Pass: |dh - dh_ref| <= tolerance |dh_ref| (default 15 %; dh_ref the theory unless
+--reference surface), steady, sane. Newtonian and
+Oldroyd-B scenes are checked; an XPP scene's rise is reported against the low-Wi estimate and
+only its sanity and steadiness are checked (as with --report-only for any scene).
+
+Several files (e.g. one fluid at several omega): each is checked; --sweep-csv / --sweep-png
+write dh against omega^2 with the theory's line.
+
+--csv writes the profile of the (last) file (annulus radii, measured, theoretical and
+surface-flow heights relative to the far level, the surface velocity); --png its picture: the particles in the vertical plane through the
+axis (|z| < dx), fluid coloured by speed, and h(r) against the theory and the surface-flow
+reference.
+
+Exit status 0 pass, 1 fail, 2 usage.
+"""
+
+import argparse
+import math
+import sys
+
+import numpy as np
+
+from vesph.output import Output, ToolError
+
+MASS_DRIFT_LIMIT = 1e-12
+VOLUME_DRIFT_LIMIT = 0.05
+SPEED_LIMIT = 5.0          # in units of the rod's speed omega a
+
+
+def _blocks(scene, kind, shape):
+    return [b for b in scene.get("blocks", []) if b.get("kind") == kind and b.get("shape") == shape]
+
+
+def setup(scene, dx):
+    """The rod, container, fluid and gravity of a rod-climbing scene: a dict."""
+    if int(scene.get("dimension", 2)) != 3:
+        raise ValueError("rod_climbing_check is for 3D scenes")
+    rods = [b for b in _blocks(scene, "wall", "cylinder") if "angular_velocity" in b]
+    if len(rods) != 1:
+        raise ValueError("expected one turning wall cylinder (the rod, with angular_velocity)")
+    rod = rods[0]
+    w = np.array([float(c) for c in rod["angular_velocity"]])
+    if abs(w[0]) > 1e-12 * abs(w[1]) or abs(w[2]) > 1e-12 * abs(w[1]) or w[1] == 0:
+        raise ValueError("the rod must turn about the vertical (y) axis")
+    containers = [b for b in _blocks(scene, "wall", "tube") if "angular_velocity" not in b]
+    fluids = _blocks(scene, "fluid", "tube")
+    if len(containers) != 1 or len(fluids) != 1:
+        raise ValueError("expected one wall tube at rest (the container) and one fluid tube")
+    g = np.zeros(3)
+    for key in ("body_force",):
+        eff = scene.get("effects", {}).get(key)
+        if eff is not None:
+            g += np.array([float(c) for c in eff["acceleration"]])
+    if not (g[1] < 0 and abs(g[0]) < 1e-12 * abs(g[1]) and abs(g[2]) < 1e-12 * abs(g[1])):
+        raise ValueError("expected gravity along -y (effects.body_force)")
+    fluid = scene["fluid"]
+    effects = scene.get("effects", {})
+    model, beta, note = "newtonian", 0.0, "Newtonian: beta = 0"
+    eta_p = lam = 0.0
+    if "oldroyd_b" in effects:
+        e = effects["oldroyd_b"]
+        eta_p, lam = float(e["polymer_viscosity"]), float(e["relaxation_time"])
+        model, beta, note = "oldroyd_b", eta_p * lam, "Oldroyd-B: beta = eta_p lambda"
+    elif "xpp" in effects:
+        e = effects["xpp"]
+        lam = float(e["backbone_relaxation_time"])
+        eta_p = float(e["polymer_viscosity"]) if "polymer_viscosity" in e else float(e["modulus"]) * lam
+        alpha = float(e.get("anisotropy", 0.0))
+        model = "xpp"
+        beta = eta_p * lam * (1 - 2 * alpha)
+        note = "XPP at low Wi: beta = eta_p lambda_0b (1 - 2 alpha)"
+    elif any(k in effects for k in ("ucm", "second_order_fluid")):
+        raise ValueError("only Newtonian, Oldroyd-B and XPP scenes are measured")
+    axis = np.array([float(c) for c in rod["axis_point"]])
+    centre = np.array([float(c) for c in fluids[0]["centre"]])
+    if abs(axis[0] - centre[0]) > 1e-9 * dx or abs(axis[2] - centre[2]) > 1e-9 * dx:
+        raise ValueError("the rod turns about an axis other than the fluid's")
+    return {
+        "omega": float(w[1]), "a": 0.5 * float(rod["diameter"]), "R": 0.5 * float(containers[0]["inner_diameter"]),
+        "axis": np.array([axis[0], axis[2]]), "g": float(-g[1]), "rho": float(fluid["density"]),
+        "eta_s": float(fluid.get("viscosity", 0.0)), "eta_p": eta_p, "lam": lam, "model": model,
+        "beta": beta, "note": note,
+        "y0": float(fluids[0]["centre"][1]) - 0.5 * float(fluids[0]["length"]),
+    }
+
+
+def couette_height(r, omega, a, R, g, rho, beta):
+    """The theory's h(r) + const (m): the second-order fluid's steady surface in circular
+    Couette flow (docstring; docs/validation.md §20)."""
+    A = -omega * a * a / (R * R - a * a)
+    B = omega * a * a * R * R / (R * R - a * a)
+    r = np.asarray(r, dtype=float)
+    return (A * A * r * r / 2 + 2 * A * B * np.log(r) - B * B / (2 * r * r)) / g + 2 * beta * B * B / (rho * g * r ** 4)
+
+
+def annulus_mean(f, r1, r2, n=400):
+    """The area-weighted mean of f(r) over r1 < r < r2 (midpoint rule in r^2)."""
+    s = np.linspace(r1 * r1, r2 * r2, n + 1)
+    mid = np.sqrt(0.5 * (s[1:] + s[:-1]))
+    return float(np.mean(f(mid)))
+
+
+def theory_rise(p, dx):
+    """(dh of the annulus means, the infinite-container point value h(a) - h(inf)), m."""
+    h = lambda r: couette_height(r, p["omega"], p["a"], p["R"], p["g"], p["rho"], p["beta"])  # noqa: E731
+    a, R = p["a"], p["R"]
+    finite = annulus_mean(h, a, a + dx) - annulus_mean(h, *far_band(p, dx))
+    infinite = p["omega"] ** 2 * (2 * p["beta"] - p["rho"] * a * a / 2) / (p["rho"] * p["g"])
+    return finite, infinite
+
+
+def column_heights(r, vol, edges):
+    """The column height of each annulus (sum of the volumes in it over its area), m."""
+    which = np.searchsorted(edges, r) - 1
+    ok = (which >= 0) & (which < len(edges) - 1)
+    v = np.bincount(which[ok], weights=vol[ok], minlength=len(edges) - 1)
+    return v / (np.pi * (edges[1:] ** 2 - edges[:-1] ** 2))
+
+
+def surface_heights(r, theta, y, v_theta, edges, dx):
+    """The free surface of each annulus, m, and the azimuthal velocity there, m/s: the means
+    over the annulus' angular sectors (arcs of about 2 dx at its mid radius) of the highest
+    fluid particle in each sector and of its velocity. A sector whose top particle lies more
+    than dx/2 below the median of the annulus' sectors (its surface particle moved into the
+    next sector) is left out; NaN for an empty annulus."""
+    h = np.full(len(edges) - 1, np.nan)
+    v = np.full(len(edges) - 1, np.nan)
+    which = np.searchsorted(edges, r) - 1
+    for i in range(len(edges) - 1):
+        sel = np.flatnonzero(which == i)
+        if not sel.size:
+            continue
+        ns = max(1, int(round(np.pi * (edges[i] + edges[i + 1]) / (2 * dx))))
+        sector = np.minimum((theta[sel] + np.pi) * (ns / (2 * np.pi)), ns - 1).astype(int)
+        order = np.lexsort((y[sel], sector))            # by sector, then height
+        last = np.flatnonzero(np.r_[sector[order][1:] != sector[order][:-1], True])
+        top = sel[order[last]]
+        keep = y[top] > np.median(y[top]) - 0.5 * dx
+        h[i] = float(np.mean(y[top[keep]]))
+        v[i] = float(np.mean(v_theta[top[keep]]))
+    return h, v
+
+
+def band_mean(values, edges, r1, r2):
+    """The area-weighted mean of per-annulus values over the annuli inside r1 <= r <= r2."""
+    area = np.pi * (edges[1:] ** 2 - edges[:-1] ** 2)
+    sel = (edges[:-1] >= r1 - 1e-9 * (r2 - r1)) & (edges[1:] <= r2 + 1e-9 * (r2 - r1)) & np.isfinite(values)
+    return float(np.sum(values[sel] * area[sel]) / np.sum(area[sel]))
+
+
+def far_band(p, dx):
+    """The far level's radii: R/2 .. R - dx (the last annulus, next to the container's wall,
+    is left out: its surface particles sit lower, as next to any wall)."""
+    return 0.5 * p["R"], p["R"] - dx
+
+
+def measure_frame(g, p, dx):
+    """The measurements of one frame: a dict (surface heights, rise, sanity figures)."""
+    fl = g["kind"] == 0
+    x = g["position"][fl]
+    d = np.stack([x[:, 0] - p["axis"][0], x[:, 2] - p["axis"][1]], axis=1)
+    r = np.hypot(d[:, 0], d[:, 1])
+    theta = np.arctan2(d[:, 1], d[:, 0])
+    y = x[:, 1] - p["y0"]
+    vel = g["velocity"][fl]
+    # azimuthal velocity in the rod's sense of rotation (omega about +y: e_theta = (z, 0, -x)/r)
+    v_theta = math.copysign(1.0, p["omega"]) * (vel[:, 0] * d[:, 1] - vel[:, 2] * d[:, 0]) / np.maximum(r, 1e-300)
+    vol = g["mass"][fl] / g["density"][fl]
+    a, R = p["a"], p["R"]
+    n = max(1, int(round((R - a) / dx)))
+    edges = a + (R - a) * np.arange(n + 1) / n
+    h, v_surf = surface_heights(r, theta, y, v_theta, edges, dx)
+    column = column_heights(r, vol, edges)
+    h_far = band_mean(h, edges, *far_band(p, dx))
+    speed = np.linalg.norm(vel, axis=1)
+    # Filling of the interior: rings 2 dx x 2 dx inside the fluid.
+    re = np.arange(a + dx, R - dx + 1e-9 * dx, 2 * dx)
+    depth = float(np.nanmedian(column))
+    ye = np.arange(dx, depth - 2 * dx + 1e-9 * dx, 2 * dx)
+    fill = 1.0
+    if len(re) > 1 and len(ye) > 1:
+        hist, _, _ = np.histogram2d(r, y, bins=(re, ye), weights=vol)
+        cell = np.pi * (re[1:] ** 2 - re[:-1] ** 2)[:, None] * np.diff(ye)[None, :]
+        fill = float((hist / cell).min())
+    return {"edges": edges, "h": h, "v_surf": v_surf, "h_far": h_far, "rise": float(h[0] - h_far),
+            "mass": float(np.sum(g["mass"][fl], dtype=np.float64)), "volume": float(np.sum(vol)),
+            "max_speed": float(speed.max()) if speed.size else 0.0, "fill": fill}
+
+
+def surface_flow_profile(edges, v_surf, p, dx):
+    """The surface that the radial balance of the theory gives with the measured surface
+    velocity v_s(r) in place of the Couette profile: the annulus means (m, relative to the far
+    band; NaN for an empty annulus) of the h(r) with
+        rho g h' = rho v_s^2/r - 2 beta gamma_s^2/r,  gamma_s = r d(v_s/r)/dr
+    (beta's normal stress taken as psi1 = 2 beta, psi2 = 0: exact for Oldroyd-B). The angular
+    velocity v_s/r is interpolated as a power of r between the rod's (omega, no slip at r = a)
+    and the annuli's mid radii (exact for the potential vortex), on a grid of dx/200."""
+    mid = 0.5 * (edges[1:] + edges[:-1])
+    ok = np.isfinite(v_surf)
+    nodes_r = np.concatenate([[p["a"]], mid[ok]])
+    spin = np.concatenate([[abs(p["omega"])], v_surf[ok] / mid[ok]])
+    spin = np.maximum(spin, 1e-9 * abs(p["omega"]))       # a power law needs spin > 0
+    r = np.linspace(p["a"], edges[-1], int(round(200 * (edges[-1] - p["a"]) / dx)) + 1)
+    w = np.exp(np.interp(np.log(r), np.log(nodes_r), np.log(spin)))
+    gamma = r * np.gradient(w, r, edge_order=2)
+    slope = ((w * r) ** 2 / r - 2 * p["beta"] * gamma * gamma / (p["rho"] * r)) / p["g"]
+    h = np.concatenate([[0.0], np.cumsum(0.5 * (slope[1:] + slope[:-1]) * np.diff(r))])
+    means = np.full(len(mid), np.nan)
+    for i in range(len(mid)):
+        sel = (r >= edges[i]) & (r <= edges[i + 1])
+        if ok[i] and sel.sum() > 1:
+            means[i] = float(np.sum(h[sel] * r[sel]) / np.sum(r[sel]))
+    return means - band_mean(means, edges, *far_band(p, dx))
+
+
+def check_file(path, frames_avg=4, tolerance=0.15, steady_tolerance=0.1, void_limit=0.7, report_only=False,
+               csv=None, png=None, reference_kind="couette", out=sys.stdout, err=sys.stderr):
+    """Check one output; returns (status, summary dict or None)."""
+    try:
+        h5 = Output(path)
+    except ToolError as e:
+        print(f"FAIL: {e}", file=err)
+        return 1, None, []
+    problems = []
+    with h5:
+        dx = h5.dx
+        try:
+            p = setup(h5.scene, dx)
+        except (ValueError, KeyError, TypeError) as e:
+            print(f"FAIL: {path}: {e}", file=err)
+            return 1, None, []
+        fields = ("kind", "position", "velocity", "mass", "density")
+        rows = []
+        for k, (name, t) in enumerate(h5.frames):
+            m = measure_frame(h5.read(k, fields), p, dx)
+            m.update(frame=name, time=t)
+            rows.append(m)
+        theory, infinite = theory_rise(p, dx)
+        a, R, omega = p["a"], p["R"], p["omega"]
+        wi = p["lam"] * abs(omega)
+        print(f"file: {path}\n{p['model']}: a = {a:.6g} m  R = {R:.6g} m (R/a = {R / a:.3g})  omega = {omega:.6g} rad/s"
+              f"  g = {p['g']:.6g} m/s^2  rho = {p['rho']:.6g} kg/m^3  dx = {dx:.6g} m\n"
+              f"Fr = omega^2 a/g = {omega * omega * a / p['g']:.4g}  Re = rho omega a^2/eta0 = "
+              f"{p['rho'] * abs(omega) * a * a / max(p['eta_s'] + p['eta_p'], 1e-300):.4g}  Wi = lambda omega = {wi:.4g}"
+              f"  beta = {p['beta']:.6g} Pa s^2 ({p['note']})", file=out)
+        print(f"{'frame':>8} {'time [s]':>10} {'rise [m]':>12} {'rise [dx]':>10} {'far level [m]':>14}"
+              f" {'vol drift':>10} {'max|v|/(wa)':>12} {'min fill':>9}", file=out)
+        m0, v0 = rows[0]["mass"], rows[0]["volume"]
+        for m in rows:
+            print(f"{m['frame']:>8} {m['time']:10.5g} {m['rise']:12.5g} {m['rise'] / dx:10.4f} {m['h_far']:14.6g}"
+                  f" {m['volume'] / v0 - 1:10.2e} {m['max_speed'] / (abs(omega) * a):12.4g} {m['fill']:9.3f}", file=out)
+            if abs(m["mass"] / m0 - 1) > MASS_DRIFT_LIMIT:
+                problems.append(f"frame {m['frame']}: fluid mass drift {m['mass'] / m0 - 1:.3e}")
+            if abs(m["volume"] / v0 - 1) > VOLUME_DRIFT_LIMIT:
+                problems.append(f"frame {m['frame']}: fluid volume changed by {100 * (m['volume'] / v0 - 1):.3g} %")
+            if not m["max_speed"] <= SPEED_LIMIT * abs(omega) * a:
+                problems.append(f"frame {m['frame']}: a particle at {m['max_speed']:.4g} m/s > {SPEED_LIMIT:g} omega a")
+            if m["time"] > 0 and not m["fill"] > void_limit:
+                problems.append(f"frame {m['frame']}: interior filling {m['fill']:.3f} <= {void_limit:g} (a void)")
+        n = min(frames_avg, (len(rows) - 1) // 2)
+        if n < 1:
+            print(f"FAIL: {path}: {len(rows)} frames; need at least 3 to judge the steady state", file=err)
+            return 1, None, []
+        last = rows[-n:]
+        before = rows[-2 * n:-n]
+        rise = float(np.mean([m["rise"] for m in last]))
+        drift = rise - float(np.mean([m["rise"] for m in before]))
+        edges = rows[-1]["edges"]
+        # The profiles: time means of the last frames, relative to the far level.
+        prof = np.nanmean([m["h"] - m["h_far"] for m in last], axis=0)
+        v_surf = np.nanmean([m["v_surf"] for m in last], axis=0)
+        surface_ref = surface_flow_profile(edges, v_surf, p, dx)
+        surface_rise = float(surface_ref[0])
+        reference = theory if reference_kind == "couette" else surface_rise
+        scale = max(abs(reference), 1e-300)
+        steady = abs(drift) <= steady_tolerance * scale
+        error = (rise - reference) / scale
+        check = p["model"] != "xpp" and not report_only
+        ok = abs(error) <= tolerance
+        lo, hi = far_band(p, dx)
+        print(f"rise at the rod (annulus {a:.4g}..{a + dx:.4g} m) above the far level ({lo:.4g}..{hi:.4g} m), mean of the"
+              f" last {n} frames (t = {last[0]['time']:.4g}..{last[-1]['time']:.4g} s): {rise:.5g} m = {rise / dx:.4f} dx"
+              f" = {rise / a:.4g} a", file=out)
+        print(f"theory (second order, Couette profile of the container, same annuli): {theory:.5g} m = {theory / dx:.4f} dx;"
+              f" infinite container at r = a: {infinite:.5g} m; measured/theory = {rise / theory if theory else math.nan:.3f}",
+              file=out)
+        print(f"surface-flow reference (the same balance with the measured surface velocity, "
+              f"{100 * v_surf[0] / (abs(omega) * a):.3g} % of omega a in the first annulus): {surface_rise:.5g} m ="
+              f" {surface_rise / dx:.4f} dx; measured/reference = {rise / surface_rise if surface_rise else math.nan:.3f}",
+              file=out)
+        print(f"error {100 * error:+.3g} % of the {reference_kind} reference (pass within {100 * tolerance:g} %)"
+              f"{'' if check else ' [reported only]'}: {'ok' if ok else 'FAIL' if check else 'outside'}", file=out)
+        print(f"steady: the mean of the {n} frames before differs by {drift:.3g} m = {100 * drift / scale:.3g} % of the reference"
+              f" (within {100 * steady_tolerance:g} %): {'ok' if steady else 'FAIL'}", file=out)
+        print(f"sanity: mass drift {rows[-1]['mass'] / m0 - 1:.2e}, volume {100 * (rows[-1]['volume'] / v0 - 1):+.3g} %,"
+              f" max speed {max(m['max_speed'] for m in rows) / (abs(omega) * a):.3g} omega a,"
+              f" least interior filling {min(m['fill'] for m in rows[1:]) if len(rows) > 1 else 1.0:.3f}"
+              f" (pass above {void_limit:g})", file=out)
+        if check and not ok:
+            problems.append(f"rise {rise:.4g} m is {100 * error:+.3g} % off the {reference_kind} reference's {reference:.4g} m")
+        if not steady:
+            problems.append(f"not steady: the rise changed by {drift:.3g} m ({100 * drift / scale:.3g} % of the reference)")
+        hfun = lambda r: couette_height(r, omega, a, R, p["g"], p["rho"], p["beta"])  # noqa: E731
+        far_th = annulus_mean(hfun, lo, hi)
+        th = np.array([annulus_mean(hfun, edges[i], edges[i + 1]) - far_th for i in range(len(edges) - 1)])
+        if csv:
+            with open(csv, "w") as fh:
+                fh.write("r_inner_m,r_outer_m,r_mid_m,h_measured_m,h_theory_m,h_surface_flow_m,v_surface_m_s\n")
+                for i in range(len(edges) - 1):
+                    fh.write(f"{edges[i]:.9g},{edges[i + 1]:.9g},{0.5 * (edges[i] + edges[i + 1]):.9g},"
+                             f"{prof[i]:.9g},{th[i]:.9g},{surface_ref[i]:.9g},{v_surf[i]:.9g}\n")
+            print(f"csv: {csv}", file=out)
+        if png:
+            _picture(h5, p, dx, edges, prof, hfun, far_th, surface_ref, png)
+            print(f"png: {png}", file=out)
+    summary = {"path": path, "omega": omega, "wi": wi, "rise": rise, "theory": theory, "infinite": infinite,
+               "surface": surface_rise,
+               "model": p["model"], "dx": dx, "a": a, "drift": drift}
+    return (1 if problems else 0), summary, problems
+
+
+def _picture(h5, p, dx, edges, prof, hfun, far_th, surface_ref, png):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    k = len(h5.frames) - 1
+    g = h5.read(k, ("kind", "position", "velocity"))
+    x = g["position"]
+    sl = np.abs(x[:, 2] - p["axis"][1]) < dx
+    fl = sl & (g["kind"] == 0)
+    wl = sl & (g["kind"] != 0)
+    a, R = p["a"], p["R"]
+    fig, (ax, bx) = plt.subplots(1, 2, figsize=(12, 4.2), gridspec_kw={"width_ratios": [1.6, 1]})
+    ax.scatter(x[wl, 0] / a, (x[wl, 1] - p["y0"]) / a, s=2, c="0.6", lw=0)
+    sp = np.linalg.norm(g["velocity"][fl], axis=1) / (abs(p["omega"]) * a)
+    sc = ax.scatter(x[fl, 0] / a, (x[fl, 1] - p["y0"]) / a, s=3, c=sp, cmap="viridis", lw=0, vmin=0, vmax=1)
+    fig.colorbar(sc, ax=ax, label="|v| / (omega a)")
+    ax.set_aspect("equal")
+    ax.set_xlabel("x / a")
+    ax.set_ylabel("y / a")
+    ax.set_title(f"{h5.name}: particles with |z| < dx, t = {h5.frames[k][1]:g} s")
+    rr = np.linspace(a, R, 300)
+    mid = 0.5 * (edges[1:] + edges[:-1])
+    bx.plot(rr / a, (hfun(rr) - far_th) / dx, "k-", label="second-order theory (point values)")
+    th = [annulus_mean(hfun, edges[i], edges[i + 1]) - far_th for i in range(len(edges) - 1)]
+    bx.plot(mid / a, np.array(th) / dx, "k+", label="theory, annulus means")
+    bx.plot(mid / a, surface_ref / dx, "x--", color="tab:blue", lw=0.8, label="with the measured surface velocity")
+    bx.plot(mid / a, prof / dx, "o", mfc="none", color="tab:red", label="measured (top particles)")
+    bx.axhline(0, color="0.7", lw=0.8)
+    bx.set_xlabel("r / a")
+    bx.set_ylabel("h(r) - h(far)  [dx]")
+    lo, hi = far_band(p, dx)
+    bx.set_title(f"surface height (far: {lo / a:g} a < r < {hi / a:g} a)")
+    bx.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(png, dpi=90)
+    plt.close(fig)
+
+
+def _sweep(summaries, csv, png, out):
+    summaries = sorted(summaries, key=lambda s: abs(s["omega"]))
+    print(f"{'omega [rad/s]':>14} {'Wi':>8} {'omega^2':>10} {'rise [m]':>12} {'theory [m]':>12} {'rise/theory':>12}",
+          file=out)
+    for s in summaries:
+        print(f"{s['omega']:14.6g} {s['wi']:8.4g} {s['omega'] ** 2:10.5g} {s['rise']:12.5g} {s['theory']:12.5g}"
+              f" {s['rise'] / s['theory'] if s['theory'] else float('nan'):12.4g}", file=out)
+    if csv:
+        with open(csv, "w") as fh:
+            fh.write("file,model,omega_rad_s,wi,rise_m,theory_m,infinite_m\n")
+            for s in summaries:
+                fh.write(f"{s['path']},{s['model']},{s['omega']:.9g},{s['wi']:.6g},{s['rise']:.9g},{s['theory']:.9g},"
+                         f"{s['infinite']:.9g}\n")
+        print(f"sweep csv: {csv}", file=out)
+    if png:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+        fig, ax = plt.subplots(figsize=(6, 4.2))
+        for model in sorted({s["model"] for s in summaries}):
+            ss = [s for s in summaries if s["model"] == model]
+            w2 = np.array([s["omega"] ** 2 for s in ss])
+            dx = ss[0]["dx"]
+            ax.plot(w2, [s["rise"] / dx for s in ss], "o-", label=f"{model}: measured")
+            line = np.linspace(0, w2.max() * 1.05, 50)
+            slope = ss[0]["theory"] / ss[0]["omega"] ** 2
+            ax.plot(line, slope * line / dx, "--", label=f"{model}: second-order theory")
+            for s in ss:
+                ax.annotate(f"Wi={s['wi']:.2g}", (s["omega"] ** 2, s["rise"] / dx), fontsize=7,
+                            textcoords="offset points", xytext=(4, -10))
+        ax.axhline(0, color="0.7", lw=0.8)
+        ax.set_xlabel("omega^2  [rad^2/s^2]")
+        ax.set_ylabel("h(rod) - h(far)  [dx]")
+        ax.set_title("rise at the rod against omega^2")
+        ax.legend(fontsize=8)
+        fig.tight_layout()
+        fig.savefig(png, dpi=90)
+        plt.close(fig)
+        print(f"sweep png: {png}", file=out)
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(prog="rod_climbing_check",
+                                 description="Free-surface height at a rotating rod against the second-order theory.")
+    ap.add_argument("h5files", metavar="H5FILE", nargs="+")
+    ap.add_argument("--frames", type=int, default=4, help="frames averaged at the end (default 4)")
+    ap.add_argument("--tolerance", type=float, default=0.15, help="fraction of the theory's rise (default 0.15)")
+    ap.add_argument("--steady-tolerance", type=float, default=0.1,
+                    help="change between the last two groups of frames, fraction of the theory (default 0.1)")
+    ap.add_argument("--void-limit", type=float, default=0.7, help="least interior filling (default 0.7)")
+    ap.add_argument("--reference", choices=("couette", "surface"), default="couette",
+                    help="compare with the Couette-profile theory (default) or the surface-flow reference")
+    ap.add_argument("--report-only", action="store_true", help="do not compare with the theory (sanity and steadiness only)")
+    ap.add_argument("--csv", metavar="CSV", help="the profile of the last file")
+    ap.add_argument("--png", metavar="PNG", help="section and profile of the last file")
+    ap.add_argument("--sweep-csv", metavar="CSV", help="rise against omega of all files")
+    ap.add_argument("--sweep-png", metavar="PNG", help="rise against omega^2 of all files")
+    a = ap.parse_args(argv)
+    if a.frames < 1:
+        ap.error("--frames must be at least 1")
+    status, summaries, problems = 0, [], []
+    for i, path in enumerate(a.h5files):
+        last = i == len(a.h5files) - 1
+        res = check_file(path, a.frames, a.tolerance, a.steady_tolerance, a.void_limit, a.report_only,
+                         a.csv if last else None, a.png if last else None, a.reference)
+        if res[1] is None:
+            status = 1
+            continue
+        st, summary, probs = res
+        status = max(status, st)
+        summaries.append(summary)
+        problems += [f"{path}: {q}" for q in probs]
+    if len(summaries) > 1 or a.sweep_csv or a.sweep_png:
+        _sweep(summaries, a.sweep_csv, a.sweep_png, sys.stdout)
+    for q in problems:
+        print(f"FAIL: {q}", file=sys.stderr)
+    print("RESULT: " + ("FAIL" if status else "PASS"))
+    return status
+
+
+if __name__ == "__main__":
+    sys.exit(main())
