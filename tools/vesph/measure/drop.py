@@ -488,7 +488,7 @@ def plot_pictures(png, runs, a):
             ax.set_aspect("equal")
             ax.set_title(f"{lab}, t V/D = {tvd:.3g}", fontsize=9)
             ax.tick_params(labelsize=7)
-    fig.supxlabel("x / D from the drop's centre line; y / D above the wall", fontsize=9)
+    fig.supxlabel("x / D from the drop's centre line;\ny / D above the wall", fontsize=9)
     fig.tight_layout()
     fig.savefig(png, dpi=110)
     plt.close(fig)
