@@ -34,10 +34,11 @@ plane; its *offset* is the centroid's distance from the nozzle axis.
   cross-section exceeds --pile-factor (default 2) times the jet's pi R^2: the mound (or
   heap of folds and coils) the jet piles up, / D. 0 before the jet reaches the plate.
 - buckling indicator: the largest slab offset / D over the slabs holding at least a quarter
-  of the jet's cross-section pi R^2 / 4 (stray droplets do not count), and the height
-  of that slab / D. An axisymmetric jet and mound keep every centroid on the axis (the
-  offset is lattice noise, about 1e-3 D); a buckled jet folds or coils sideways by about
-  its diameter. The frame *buckles* when the indicator exceeds --threshold (default 0.25:
+  of the jet's cross-section pi R^2 / 4 (stray droplets do not count), the height of that
+  slab / D, its two lateral components / D and its azimuth (degrees, as the band's below).
+  An axisymmetric jet and mound keep every centroid near the axis (the runs of
+  docs/validation.md §19 that do not buckle stay below 0.1 D); a buckled jet folds or coils
+  sideways by about its diameter. The frame *buckles* when the indicator exceeds --threshold (default 0.25:
   the axis displaced by a quarter diameter, 2 dx at D = 8 dx).
 - band offset and angle: the mass-weighted lateral centroid of the fluid in the band
   between the pile height and --band (default 1) D above it (the part of the jet just above
@@ -54,13 +55,13 @@ Over the run
 ------------
 - onset: the time of the first frame whose indicator exceeds --threshold (s and t U/D);
   none when no frame does.
-- coiling frequency: from the band's azimuth after the onset, unwrapped: turns = its total
+- coiling frequency: from the indicator's azimuth after the onset, unwrapped: turns = its total
   change / 2 pi, and the frequency = the slope of a least-squares line through it / 2 pi
   (Hz, and f D/U) when the azimuth turned through at least one full turn; none otherwise.
   The azimuth is sampled at the frames: it resolves rotations slower than half a turn per
   frame (output interval).
-- oscillation frequency: the zero crossings, about its mean, of the band's lateral offset
-  after the onset along its direction of largest variance, / (2 x the time after the onset)
+- oscillation frequency: the zero crossings, about its mean, of the indicator's lateral
+  offset after the onset along its direction of largest variance, / (2 x the time after the onset)
   (Hz): folding (a jet swinging in a plane) as well as coiling.
 
 Checks (exit 1 when one fails)
@@ -191,15 +192,16 @@ def pile_height(area, edges, dx, jet_area, factor):
 
 
 def buckling_indicator(area, centroid, edges, dx, jet_area):
-    """(largest slab offset [m], the middle height of its slab [m]) over the slabs holding
-    at least a quarter of the jet's cross-section; (0, nan) when none does."""
+    """(largest slab offset [m], the middle height of its slab [m], its lateral offset
+    vector [2]) over the slabs holding at least a quarter of the jet's cross-section;
+    (0, nan, nan) when none does."""
     full = area >= 0.25 * jet_area
     if not np.any(full):
-        return 0.0, float("nan")
+        return 0.0, float("nan"), np.array([float("nan"), float("nan")])
     off = np.hypot(centroid[:, 0], centroid[:, 1])
     off = np.where(full, off, -1.0)
     i = int(np.argmax(off))
-    return float(off[i]), float(edges[i] + 0.5 * dx)
+    return float(off[i]), float(edges[i] + 0.5 * dx), centroid[i].copy()
 
 
 def band_offset(height, lat, vol, lo, hi):
@@ -286,7 +288,7 @@ def measure(jet, a):
             jet.pictures[k] = (t, height.copy(), lat.copy())
         area, cen, edges = slab_profile(height, lat, vol, dx, jet.H)
         pile = pile_height(area, edges, dx, jet_area, a.pile_factor)
-        ind, ind_h = buckling_indicator(area, cen, edges, dx, jet_area)
+        ind, ind_h, ind_vec = buckling_indicator(area, cen, edges, dx, jet_area)
         band = band_offset(height, lat, vol, pile, min(pile + a.band * D, jet.H))
         nn, iso = isolation(pos, dx)
         vg = grid_measures(pos, dx, 1.5, 3.0)["void_gap"] / dx if not a.no_voids else float("nan")
@@ -295,6 +297,9 @@ def measure(jet, a):
             "volume": float(vol.sum()),
             "pile_height_D": pile / D, "indicator_D": ind / D,
             "indicator_height_D": ind_h / D, "buckled": int(ind / D > a.threshold),
+            "indicator_1_D": ind_vec[0] / D, "indicator_2_D": ind_vec[1] / D,
+            "indicator_angle_deg": float(math.degrees(math.atan2(ind_vec[1], ind_vec[0])))
+            if np.all(np.isfinite(ind_vec)) else float("nan"),
             "band_offset_D": float(np.hypot(*band)) / D,
             "band_lateral_1_D": band[0] / D, "band_lateral_2_D": band[1] / D,
             "band_angle_deg": float(math.degrees(math.atan2(band[1], band[0])))
@@ -308,7 +313,9 @@ COLUMNS = [
     ("frame", "frame"), ("time_s", "time_s"), ("tU_D", "tU_over_D"), ("n_fluid", "n_fluid"),
     ("volume", "volume_m3"), ("pile_height_D", "pile_height_over_D"),
     ("indicator_D", "indicator_over_D"), ("indicator_height_D", "indicator_height_over_D"),
-    ("buckled", "buckled"), ("band_offset_D", "band_offset_over_D"),
+    ("buckled", "buckled"), ("indicator_1_D", "indicator_offset_1_over_D"),
+    ("indicator_2_D", "indicator_offset_2_over_D"), ("indicator_angle_deg", "indicator_angle_deg"),
+    ("band_offset_D", "band_offset_over_D"),
     ("band_lateral_1_D", "band_offset_1_over_D"), ("band_lateral_2_D", "band_offset_2_over_D"),
     ("band_angle_deg", "band_angle_deg"), ("max_nn_gap_dx", "max_nn_gap_over_dx"),
     ("isolated", "isolated"), ("void_gap_dx", "void_gap_over_dx"),
@@ -328,9 +335,9 @@ def summarise(jet, rows, a):
          "max_isolated": int(max(r["isolated"] for r in rows))}
     if k0 is not None:
         s["onset_s"] = float(t[k0])
-        s["turns"], s["coil_hz"] = coiling(t, [r["band_angle_deg"] for r in rows], k0)
+        s["turns"], s["coil_hz"] = coiling(t, [r["indicator_angle_deg"] for r in rows], k0)
         s["oscillation_hz"] = oscillation(
-            t, [(r["band_lateral_1_D"], r["band_lateral_2_D"]) for r in rows], k0)
+            t, [(r["indicator_1_D"], r["indicator_2_D"]) for r in rows], k0)
     return s
 
 
@@ -358,12 +365,12 @@ def plot(png, jet, rows, s, a):
     if s["onset_index"] is not None:
         axs[0].axvline(s["onset_s"] * jet.U / jet.D, color="r", lw=0.8, label="onset")
     axs[0].set_ylabel("offset / D")
-    ang = col("band_angle_deg")
+    ang = col("indicator_angle_deg")
     ok = np.isfinite(ang)
     unwrapped = np.full(len(ang), np.nan)
     unwrapped[ok] = np.degrees(np.unwrap(np.radians(ang[ok])))
     axs[1].plot(t, unwrapped, "o-", ms=3)
-    axs[1].set_ylabel("band azimuth, unwrapped [deg]")
+    axs[1].set_ylabel("indicator azimuth, unwrapped [deg]")
     axs[2].plot(t, col("pile_height_D"), "o-", ms=3)
     axs[2].set_ylabel("pile height / D")
     axs[3].plot(t, col("void_gap_dx"), "-", label="void gap")
@@ -453,7 +460,7 @@ def run(a):
         for r in rows:
             p(f"  {r['time_s']:8.4f} {r['tU_D']:7.2f} {r['n_fluid']:7d} {r['pile_height_D']:7.2f} "
               f"{r['indicator_D']:7.3f} {r['indicator_height_D']:7.2f} {r['band_offset_D']:7.3f} "
-              f"{r['band_angle_deg']:7.1f} {r['max_nn_gap_dx']:6.2f} {r['isolated']:5d} "
+              f"{r['indicator_angle_deg']:7.1f} {r['max_nn_gap_dx']:6.2f} {r['isolated']:5d} "
               f"{r['void_gap_dx']:7.2f}")
         U_D = jet.U / jet.D
         p(f"largest buckling indicator {s['max_indicator_D']:.3f} D (threshold {a.threshold:g} D)")
@@ -461,9 +468,9 @@ def run(a):
             p("onset: none (no frame buckles)")
         else:
             p(f"onset: t = {s['onset_s']:.4g} s (t U/D = {s['onset_s'] * U_D:.3g})")
-            p(f"coiling: {s['turns']:+.2f} turns of the band azimuth after the onset; frequency "
+            p(f"coiling: {s['turns']:+.2f} turns of the indicator's azimuth after the onset; frequency "
               f"{fmt(s['coil_hz'])} Hz (f D/U = {fmt(s['coil_hz'] / U_D)})")
-            p(f"oscillation of the band offset after the onset: {fmt(s['oscillation_hz'])} Hz "
+            p(f"oscillation of the indicator's offset after the onset: {fmt(s['oscillation_hz'])} Hz "
               f"(f D/U = {fmt(s['oscillation_hz'] / U_D)})")
         p(f"voids: largest void gap {fmt(s['max_void_gap_dx'])} dx, largest nearest-neighbour "
           f"gap {fmt(s['max_nn_gap_dx'])} dx, at most {s['max_isolated']} isolated particles")
