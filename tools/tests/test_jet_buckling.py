@@ -75,14 +75,14 @@ def column(offset, radius, y0, y1):
                             np.repeat(xz[:, 1][None, :], len(ys), 0).ravel()])
 
 
-def jet(pile, band_offset, hole=False):
+def jet(pile, band_offset, hole=False, mound_offset=(0.0, 0.0)):
     """A mound of radius 2.5 R up to y = pile, the jet's lower 2 D displaced by band_offset
     (x, z), the rest of the jet up to the nozzle on the axis. hole: an empty ball of radius
-    2 dx removed from the mound's middle."""
+    2 dx removed from the mound's middle; mound_offset: the mound's axis (x, z)."""
     R = 0.5 * D
     parts = []
     if pile > 0:
-        mound = column((0.0, 0.0), 2.5 * R, 0.0, pile)
+        mound = column(mound_offset, 2.5 * R, 0.0, pile)
         if hole:
             c = np.array([0.0, 0.5 * pile, 0.0])
             mound = mound[np.linalg.norm(mound - c, axis=1) > 2.0 * DX]
@@ -158,6 +158,18 @@ def make_jet_tests(tmp):
         rc, out, err = measure(h5, "--out-dir", tmp, "--prefix", "straight", "--expect-buckling", "--no-png")
         expect(rc == 1 and "CHECK FAILED: --expect-buckling" in out and "RESULT: FAIL" in out,
                f"--expect-buckling on a straight jet: exit {rc}", out + err)
+
+    @t
+    def lopsided_mound_under_a_straight_jet_is_not_buckling():
+        # the mound 0.6 D off the axis (spread unevenly), the column above it straight
+        h5 = write_jet(os.path.join(tmp, "lopsided.h5"),
+                       [(0.0, jet(2 * D, (0.0, 0.0))), (0.005, jet(2 * D, (0.0, 0.0), mound_offset=(0.6 * D, 0.0)))])
+        rc, out, err = measure(h5, "--out-dir", tmp, "--prefix", "lopsided", "--no-png", "--no-voids",
+                               "--expect-no-buckling")
+        expect(rc == 0 and "RESULT: PASS" in out, f"exit {rc}", out + err)
+        r = rows_of(os.path.join(tmp, "lopsided_jet.csv"))[1]
+        expect(float(r["indicator_over_D"]) < 1e-9, f"indicator {r['indicator_over_D']}")
+        expect(abs(float(r["largest_offset_with_pile_over_D"]) - 0.6) < 1e-9, f"with the pile {r}")
 
     def coil(tt):
         if tt < t_on - 1e-12:

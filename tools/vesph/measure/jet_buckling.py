@@ -8,7 +8,7 @@ frequency; CSV and PNG.
 Usage
 -----
     tools/vesph-post jet_buckling_measure H5FILE [--out-dir DIR] [--prefix NAME] [--no-png]
-        [--threshold 0.25] [--pile-factor 2] [--band 1] [--plate Y]
+        [--threshold 0.25] [--pile-factor 2] [--band 1] [--trace 1] [--plate Y]
         [--pictures T1,T2,...] [--no-voids]
         [--expect-buckling | --expect-no-buckling] [--max-void-gap G]
 
@@ -33,12 +33,17 @@ plane; its *offset* is the centroid's distance from the nozzle axis.
 - pile height: the top of the contiguous stack of slabs, from the plate up, whose
   cross-section exceeds --pile-factor (default 2) times the jet's pi R^2: the mound (or
   heap of folds and coils) the jet piles up, / D. 0 before the jet reaches the plate.
-- buckling indicator: the largest slab offset / D over the slabs holding at least a quarter
-  of the jet's cross-section pi R^2 / 4 (stray droplets do not count), the height of that
-  slab / D, its two lateral components / D and its azimuth (degrees, as the band's below).
-  An axisymmetric jet and mound keep every centroid near the axis (the runs of
-  docs/validation.md §19 that do not buckle stay below 0.1 D); a buckled jet folds or coils
-  sideways by about its diameter. The frame *buckles* when the indicator exceeds --threshold (default 0.25:
+- buckling indicator: the largest offset / D of the jet's axis, traced from the nozzle down
+  to the pile: slab by slab from the top, the mass-weighted lateral centroid of the slab's
+  particles within --trace (default 1) D of the centroid of the slab above (the nozzle axis
+  for the top slab); the height of that slab / D, its two lateral components / D and its
+  azimuth (degrees, as the band's below). The pile, and fluid away from the jet (a film or
+  mound spreading unevenly over the plate, fluid leaving over one edge first), are left
+  out: they shift slab centroids without the jet buckling. The largest centroid offset of
+  whole slabs with the pile included (slabs holding at least a quarter of the jet's
+  cross-section) is written too (largest_offset_with_pile_over_D). A straight jet keeps its
+  axis on the nozzle's; a buckled jet folds or coils sideways by about its diameter just
+  above the pile. The frame *buckles* when the indicator exceeds --threshold (default 0.25:
   the axis displaced by a quarter diameter, 2 dx at D = 8 dx).
 - band offset and angle: the mass-weighted lateral centroid of the fluid in the band
   between the pile height and --band (default 1) D above it (the part of the jet just above
@@ -191,17 +196,47 @@ def pile_height(area, edges, dx, jet_area, factor):
     return float(edges[0] + top * dx)
 
 
-def buckling_indicator(area, centroid, edges, dx, jet_area):
+def buckling_indicator(area, centroid, edges, dx, jet_area, above=0.0):
     """(largest slab offset [m], the middle height of its slab [m], its lateral offset
-    vector [2]) over the slabs holding at least a quarter of the jet's cross-section;
-    (0, nan, nan) when none does."""
-    full = area >= 0.25 * jet_area
+    vector [2]) over the slabs from height `above` up that hold at least a quarter of the
+    jet's cross-section; (0, nan, nan) when none does."""
+    full = (area >= 0.25 * jet_area) & (edges >= above - 1e-9 * dx)
     if not np.any(full):
         return 0.0, float("nan"), np.array([float("nan"), float("nan")])
     off = np.hypot(centroid[:, 0], centroid[:, 1])
     off = np.where(full, off, -1.0)
     i = int(np.argmax(off))
     return float(off[i]), float(edges[i] + 0.5 * dx), centroid[i].copy()
+
+
+def traced_axis(height, lat, vol, dx, H, pile, radius):
+    """The jet's axis traced from the nozzle down to the pile: slab by slab (dx thick) from
+    the top, the mass-weighted lateral centroid of the slab's particles within `radius` of
+    the centroid of the slab above (the nozzle axis for the top slab); a slab with none keeps
+    the one above. (largest offset [m], the middle height of its slab [m], its offset
+    vector [2]); (0, nan, nan) when no slab above the pile holds particles near the axis."""
+    n = max(1, int(math.ceil(H / dx)))
+    k = np.floor(height / dx).astype(int)
+    ok = (k >= 0) & (k < n) & (height >= pile)
+    k, w, p = k[ok], vol[ok], lat[ok]
+    order = np.argsort(k, kind="stable")
+    k, w, p = k[order], w[order], p[order]
+    starts = np.searchsorted(k, np.arange(n + 1))
+    c = np.zeros(2)
+    best, best_h, best_c = 0.0, float("nan"), np.array([float("nan"), float("nan")])
+    for i in range(n - 1, -1, -1):
+        lo, hi = starts[i], starts[i + 1]
+        if hi == lo:
+            continue
+        near = np.hypot(p[lo:hi, 0] - c[0], p[lo:hi, 1] - c[1]) <= radius
+        if not np.any(near):
+            continue
+        ww = w[lo:hi][near]
+        c = (ww[:, None] * p[lo:hi][near]).sum(axis=0) / ww.sum()
+        off = float(np.hypot(c[0], c[1]))
+        if not math.isfinite(best_h) or off > best:
+            best, best_h, best_c = off, (i + 0.5) * dx, c.copy()
+    return best, best_h, best_c
 
 
 def band_offset(height, lat, vol, lo, hi):
@@ -288,7 +323,8 @@ def measure(jet, a):
             jet.pictures[k] = (t, height.copy(), lat.copy())
         area, cen, edges = slab_profile(height, lat, vol, dx, jet.H)
         pile = pile_height(area, edges, dx, jet_area, a.pile_factor)
-        ind, ind_h, ind_vec = buckling_indicator(area, cen, edges, dx, jet_area)
+        ind, ind_h, ind_vec = traced_axis(height, lat, vol, dx, jet.H, pile, a.trace * D)
+        whole = buckling_indicator(area, cen, edges, dx, jet_area)[0]
         band = band_offset(height, lat, vol, pile, min(pile + a.band * D, jet.H))
         nn, iso = isolation(pos, dx)
         vg = grid_measures(pos, dx, 1.5, 3.0)["void_gap"] / dx if not a.no_voids else float("nan")
@@ -297,6 +333,7 @@ def measure(jet, a):
             "volume": float(vol.sum()),
             "pile_height_D": pile / D, "indicator_D": ind / D,
             "indicator_height_D": ind_h / D, "buckled": int(ind / D > a.threshold),
+            "largest_offset_D": whole / D,
             "indicator_1_D": ind_vec[0] / D, "indicator_2_D": ind_vec[1] / D,
             "indicator_angle_deg": float(math.degrees(math.atan2(ind_vec[1], ind_vec[0])))
             if np.all(np.isfinite(ind_vec)) else float("nan"),
@@ -313,6 +350,7 @@ COLUMNS = [
     ("frame", "frame"), ("time_s", "time_s"), ("tU_D", "tU_over_D"), ("n_fluid", "n_fluid"),
     ("volume", "volume_m3"), ("pile_height_D", "pile_height_over_D"),
     ("indicator_D", "indicator_over_D"), ("indicator_height_D", "indicator_height_over_D"),
+    ("largest_offset_D", "largest_offset_with_pile_over_D"),
     ("buckled", "buckled"), ("indicator_1_D", "indicator_offset_1_over_D"),
     ("indicator_2_D", "indicator_offset_2_over_D"), ("indicator_angle_deg", "indicator_angle_deg"),
     ("band_offset_D", "band_offset_over_D"),
@@ -359,7 +397,8 @@ def plot(png, jet, rows, s, a):
     col = lambda k: np.array([r[k] for r in rows], dtype=float)  # noqa: E731
     fig, axs = plt.subplots(2, 2, figsize=(11, 7.2), sharex=True)
     axs = axs.ravel()
-    axs[0].plot(t, col("indicator_D"), "o-", ms=3, label="indicator: largest axis offset")
+    axs[0].plot(t, col("indicator_D"), "o-", ms=3, label="indicator: largest axis offset above the pile")
+    axs[0].plot(t, col("largest_offset_D"), ":", color="0.5", label="largest offset, pile included")
     axs[0].plot(t, col("band_offset_D"), "s--", ms=3, label=f"band offset ({a.band:g} D above the pile)")
     axs[0].axhline(a.threshold, color="k", ls=":", lw=0.8, label=f"--threshold {a.threshold:g}")
     if s["onset_index"] is not None:
@@ -520,6 +559,9 @@ def main(argv=None):
     ap.add_argument("--band", type=float, default=1.0, metavar="L",
                     help="the band above the pile whose offset and azimuth are followed, "
                          "L D high (default 1)")
+    ap.add_argument("--trace", type=float, default=1.0, metavar="T",
+                    help="the jet's axis is traced through the particles within T D of the "
+                         "axis in the slab above (default 1)")
     ap.add_argument("--plate", type=float, metavar="Y",
                     help="the plate's coordinate along the nozzle axis [m] (default: the wall "
                          "box facing the nozzle)")
@@ -533,7 +575,8 @@ def main(argv=None):
     ap.add_argument("--max-void-gap", type=float, metavar="G",
                     help="check: every frame's void gap is at most G dx (e.g. 2.5)")
     a = ap.parse_args(argv)
-    for nm, v in (("--threshold", a.threshold), ("--pile-factor", a.pile_factor), ("--band", a.band)):
+    for nm, v in (("--threshold", a.threshold), ("--pile-factor", a.pile_factor), ("--band", a.band),
+                  ("--trace", a.trace)):
         if not (math.isfinite(v) and v > 0):
             ap.error(f"{nm} must be a positive number, got {v:g}")
     if a.max_void_gap is not None and not (a.max_void_gap > 0):
