@@ -7,7 +7,7 @@
 # The buckling itself is not asserted: at this resolution (and at D = 8 dx so far) the jet's
 # axis above the pile stays within 0.25 D of the nozzle's, against Cruickshank & Munson's
 # criterion (docs/validation.md §19, "not reproduced"). The measure's indicator is printed.
-# About 30 s single-threaded.
+# About 33 s of CPU time single-threaded (measured on the shared machine: 32.6 s user).
 . "$(dirname "$0")/lib.sh"
 CASE=$SRC/cases/jet_buckling_newtonian.toml
 expect 0 "ok: finished" -- "$VESPH" run "$CASE" -o "$WORK/run" --quiet --set time.end=0.24 --set output.interval=0.01 \

@@ -1,7 +1,7 @@
 """jet_buckling_measure (vesph.measure.jet_buckling) on synthetic jet-buckling outputs: a straight
-jet on a mound (no buckling), a jet whose lower part coils (the onset, the coiling and
-oscillation frequencies), a jet folding in a plane, a void inside the mound, the checks' exit
-codes and the errors."""
+jet on a mound (no buckling), a lopsided mound under a straight jet (no buckling), a jet whose
+lower part coils (the onset, the coiling and oscillation frequencies), a jet folding in a
+plane, a void inside the mound, the checks' exit codes and the errors."""
 import csv
 import math
 import os
