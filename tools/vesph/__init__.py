@@ -11,6 +11,7 @@ Modules
                  second-order fluid channel, XPP shear
     checks.*     validation checks against analytic solutions, the output format checker
     measure.*    drop impact, die swell, channel profiles, inflow, hydrostatic tank, dam-break front,
+                 jet buckling,
                  plane sections of 3D runs
     studies.*    parameter studies that run vesph (work-precision, CFL, sound speed,
                  convergence, die swell, ISPH linear solvers, 3D performance)
@@ -44,6 +45,7 @@ TOOL_MODULES = {
     "die_swell_lip": "vesph.measure.die_swell_lip",
     "startup_channel_profiles": "vesph.measure.channel_profiles",
     "section": "vesph.measure.section",
+    "jet_buckling_measure": "vesph.measure.jet_buckling",
     "study_work_precision": "vesph.studies.work_precision",
     "study_cfl": "vesph.studies.cfl",
     "study_sound_speed": "vesph.studies.sound_speed",
