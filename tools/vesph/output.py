@@ -81,6 +81,21 @@ def read_header(f, path):
     return scene, dim, dx
 
 
+def nonnegative_list(what):
+    """An argparse type: comma-separated numbers >= 0 (`what` names them in the error)."""
+    import argparse
+
+    def parse(text):
+        try:
+            vals = [float(v) for v in text.split(",") if v.strip()]
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected {what} separated by commas, got {text!r}")
+        if not vals or any(not (v >= 0) for v in vals):
+            raise argparse.ArgumentTypeError(f"expected {what} >= 0, got {text!r}")
+        return vals
+    return parse
+
+
 def run_reporting_errors(prog, run, args):
     """run(args), turning a ToolError into 'PROG: error: message' on stderr and its status."""
     import sys

@@ -713,15 +713,7 @@ def requested_checks(a):
             or a.min_spread is not None or a.expect_retraction is not None)
 
 
-def picture_times(text):
-    """--pictures: comma-separated t V/D values >= 0."""
-    try:
-        vals = [float(v) for v in text.split(",") if v.strip()]
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected numbers t V/D separated by commas, got {text!r}")
-    if not vals or any(not (v >= 0) for v in vals):
-        raise argparse.ArgumentTypeError(f"expected t V/D values >= 0, got {text!r}")
-    return vals
+picture_times = vesph_output.nonnegative_list("numbers t V/D")
 
 
 def main(argv=None):

@@ -533,14 +533,7 @@ def run(a):
         return 0 if ok else 1
 
 
-def times_list(text):
-    try:
-        vals = [float(v) for v in text.split(",") if v.strip()]
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected times [s] separated by commas, got {text!r}")
-    if not vals or any(not (v >= 0) for v in vals):
-        raise argparse.ArgumentTypeError(f"expected times >= 0, got {text!r}")
-    return vals
+times_list = vesph_output.nonnegative_list("times [s]")
 
 
 def main(argv=None):
