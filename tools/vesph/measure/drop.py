@@ -213,14 +213,20 @@ def clusters(pos, link_dist, min_cluster, min_fragment=0.0):
             int(np.count_nonzero(fragment)), largest)
 
 
-def max_nn_gap(pos):
-    """Largest nearest-neighbour distance over the particles (nan with < 2 particles)."""
+def nearest_neighbour_distances(pos):
+    """Each particle's distance to its nearest neighbour (None with < 2 particles)."""
     from scipy.spatial import cKDTree
 
     if len(pos) < 2:
-        return float("nan")
+        return None
     d, _ = cKDTree(pos).query(pos, k=2)
-    return float(d[:, 1].max())
+    return d[:, 1]
+
+
+def max_nn_gap(pos):
+    """Largest nearest-neighbour distance over the particles (nan with < 2 particles)."""
+    d = nearest_neighbour_distances(pos)
+    return float("nan") if d is None else float(d.max())
 
 
 def open_radius(dim, link):

@@ -250,12 +250,12 @@ def band_offset(height, lat, vol, lo, hi):
 
 def isolation(pos, dx):
     """(largest nearest-neighbour distance / dx, particles with none within ISOLATION dx)."""
-    from scipy.spatial import cKDTree
+    from vesph.measure.drop import nearest_neighbour_distances
 
-    if len(pos) < 2:
+    d = nearest_neighbour_distances(pos)
+    if d is None:
         return float("nan"), 0
-    d, _ = cKDTree(pos).query(pos, k=2)
-    nn = d[:, 1] / dx
+    nn = d / dx
     return float(nn.max()), int(np.count_nonzero(nn > ISOLATION))
 
 
