@@ -4,6 +4,9 @@
 #include <algorithm>
 #include <cmath>
 
+#include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>  // cross products
+
 #include "vesph/core/types.hpp"
 
 namespace vesph {
@@ -22,7 +25,10 @@ void DummyWalls<D>::setup(Setup<D>& s) {
   const std::size_t n0 = s.particles.n_moving;
   if (!points_.empty() && points_.size() != s.particles.size() - n0)
     throw std::logic_error("wall treatment given for a different number of fixed particles");
-  for (const WallPoint<D>& w : points_) any_floor_ = any_floor_ || std::isfinite(w.pressure_floor);
+  for (const WallPoint<D>& w : points_) {
+    any_floor_ = any_floor_ || std::isfinite(w.pressure_floor);
+    any_polar_ = any_polar_ || w.polar;
+  }
   if (any_floor_ && !model_)
     throw InputError("blocks: pressure_floor bounds the wall pressure extrapolated from the equation of state; "
                      "the scene has none (add [effects.equation_of_state] or remove pressure_floor)");
@@ -40,6 +46,71 @@ template <int D>
 int diagonalComponent(int a) {
   if constexpr (D == 2) return a == 0 ? 0 : 2;
   else return a == 0 ? 0 : a == 1 ? 3 : 5;
+}
+
+template <int D>
+using Rotation = Eigen::Matrix<double, D, D>;
+
+// The rotation about the polar wall's axis that takes the azimuth of x_f to that of x_w
+// (dummy_walls.hpp, frame = "polar"): cos and sin of the angle between the two radial
+// directions, then R = [[c, -s], [s, c]] (2D, about z) or Rodrigues' c I + s [e]x + (1 - c) e e^T
+// (3D, about the unit axis e). The identity when either point lies within `tiny` (m) of the axis.
+template <int D>
+Rotation<D> azimuthalRotation(const WallPoint<D>& wp, const Vec<D>& xw, const Vec<D>& xf, double tiny) {
+  Vec<D> rw = xw - wp.axis_point, rf = xf - wp.axis_point;
+  if constexpr (D == 3) {
+    rw -= rw.dot(wp.axis) * wp.axis;
+    rf -= rf.dot(wp.axis) * wp.axis;
+  }
+  const double nw = rw.norm(), nf = rf.norm();
+  if (!(nw > tiny && nf > tiny)) return Rotation<D>::Identity();
+  const double nn = nw * nf;
+  const double c = rw.dot(rf) / nn;
+  Rotation<D> R;
+  if constexpr (D == 2) {
+    const double s = (rf[0] * rw[1] - rf[1] * rw[0]) / nn;
+    R << c, -s, s, c;
+  } else {
+    const Vec<3>& e = wp.axis;
+    const double s = e.dot(rf.cross(rw)) / nn;
+    Rotation<3> K;
+    K << 0, -e[2], e[1], e[2], 0, -e[0], -e[1], e[0], 0;
+    R = c * Rotation<3>::Identity() + s * K + (1.0 - c) * e * e.transpose();
+  }
+  return R;
+}
+
+// A field's value at one particle turned by R (Field::Transform) into out.
+template <int D>
+void rotatedValue(const Field& f, const double* src, const Rotation<D>& R, double* out) {
+  switch (f.transform) {
+    case Field::Transform::vector: {
+      const Vec<D> v = R * Eigen::Map<const Vec<D>>(src);
+      for (int a = 0; a < D; ++a) out[a] = v[a];
+      return;
+    }
+    case Field::Transform::symmetric_tensor: {
+      Rotation<D> S;
+      if constexpr (D == 2) S << src[0], src[1], src[1], src[2];
+      else S << src[0], src[1], src[2], src[1], src[3], src[4], src[2], src[4], src[5];
+      const Rotation<D> T = R * S * R.transpose();
+      if constexpr (D == 2) {
+        out[0] = T(0, 0); out[1] = T(0, 1); out[2] = T(1, 1);
+      } else {
+        out[0] = T(0, 0); out[1] = T(0, 1); out[2] = T(0, 2); out[3] = T(1, 1); out[4] = T(1, 2); out[5] = T(2, 2);
+      }
+      return;
+    }
+    case Field::Transform::tensor: {
+      const Rotation<D> T = R * Eigen::Map<const Eigen::Matrix<double, D, D, Eigen::RowMajor>>(src) * R.transpose();
+      Eigen::Map<Eigen::Matrix<double, D, D, Eigen::RowMajor>> target(out);
+      target = T;
+      return;
+    }
+    case Field::Transform::invariant:
+      for (int c = 0; c < f.components; ++c) out[c] = src[c];
+      return;
+  }
 }
 }  // namespace
 
@@ -60,6 +131,15 @@ void DummyWalls<D>::update(const RhsContext<D>& ctx, const NeighbourList<D>& lis
         interpolated_.push_back(f.get());
       }
     interpolated_ready_ = true;
+    if (any_polar_)
+      for (const Field* f : interpolated_) {
+        const int expected = f->transform == Field::Transform::vector             ? D
+                             : f->transform == Field::Transform::symmetric_tensor ? (D == 2 ? 3 : 6)
+                             : f->transform == Field::Transform::tensor           ? D * D
+                                                                                  : f->components;
+        if (f->components != expected || f->components > 9)
+          throw std::logic_error("field " + f->name + ": its components do not match its transform");
+      }
     for (const Field* f : interpolated_)
       if (any_image_ && (interpolated_.size() > 8 || f->components > 8))
         throw std::logic_error("image walls interpolate at most 8 fields of at most 8 components");
@@ -77,7 +157,7 @@ void DummyWalls<D>::update(const RhsContext<D>& ctx, const NeighbourList<D>& lis
       int axis = 0;
       for (int a = 0; a < D; ++a)
         if (nrm[a] != 0.0) axis = a;
-      const double vol_w = interpolateFields(p, w, fluid);
+      const double vol_w = interpolateFields(p, w, fluid, nullptr);
       for (std::size_t q = 0; q < interpolated_.size(); ++q)
         if (is_stress_[q]) interpolated_[q]->data[static_cast<std::size_t>(interpolated_[q]->components) * w +
                                                   static_cast<std::size_t>(diagonalComponent<D>(axis))] = 0.0;
@@ -96,7 +176,9 @@ void DummyWalls<D>::update(const RhsContext<D>& ctx, const NeighbourList<D>& lis
     // the body force at the inlet and hold the fluid back like a wall does).
     const bool inflow = p.kind[w] == static_cast<std::uint8_t>(ParticleKind::inflow);
     double* out_v = wv + D * (w - n0);
-    interpolateFields(p, w, fluid);
+    const WallPoint<D>* point = points_.empty() ? nullptr : &points_[w - n0];
+    const WallPoint<D>* polar = any_polar_ && point->polar ? point : nullptr;
+    interpolateFields(p, w, fluid, point);
     if (inflow && ambient_inlet_) {  // a pressure inlet: the ambient pressure, rho0
       for (int a = 0; a < D; ++a) out_v[a] = p.velocity[D * w + a];
       if (pres) {
@@ -111,9 +193,20 @@ void DummyWalls<D>::update(const RhsContext<D>& ctx, const NeighbourList<D>& lis
     Vec<D> g_rel = g_;
     if (acceleration_)
       for (int a = 0; a < D; ++a) g_rel[a] -= acceleration_->data[D * (w - n0) + a];
+    // In a polar frame the fluid's velocities and positions turned to the wall particle's
+    // azimuth (dummy_walls.hpp); the pressure's hydrostatic term keeps the true offsets.
+    Vec<D> centroid = Vec<D>::Zero();  // x~_f - x_w = -sum_f W rij / sum_f W (turned: polar)
+    const Vec<D> xw = p.x(w);
     for (const Neighbour<D>& nb : fluid) {
       sumW += nb.W;
-      sum_v += nb.W * p.v(nb.j);
+      if (polar) {
+        const Rotation<D> R = azimuthalRotation(*polar, xw, Vec<D>(xw - nb.rij), 1e-6 * dx_);
+        sum_v += nb.W * (R * p.v(nb.j));
+        centroid += nb.W * (R * (xw - nb.rij - polar->axis_point) + polar->axis_point - xw);
+      } else {
+        sum_v += nb.W * p.v(nb.j);
+        centroid -= nb.W * nb.rij;
+      }
       if (pres) sum_p += pres[nb.j] * nb.W;
       if (!inflow) sum_rho_gr += p.density[nb.j] * g_rel.dot(nb.rij) * nb.W;  // rij = r_w - r_f
     }
@@ -122,8 +215,6 @@ void DummyWalls<D>::update(const RhsContext<D>& ctx, const NeighbourList<D>& lis
       // A rotating wall: the mirror of the fluid's velocity relative to the rigid motion, whose
       // Shepard average over the fluid is u_w + Omega x (x~_f - x_w) (theory.md §6.2).
       if (spin_ && !inflow) {
-        Vec<D> centroid = Vec<D>::Zero();  // x~_f - x_w = -sum_f W rij / sum_f W
-        for (const Neighbour<D>& nb : fluid) centroid -= nb.W * nb.rij;
         centroid /= sumW;
         const double* om = spin_->data.data() + static_cast<std::size_t>(spin_->components) * (w - n0);
         if constexpr (D == 2) {
@@ -167,22 +258,62 @@ void DummyWalls<D>::velocityDependence(const ParticleSet<D>& p, std::vector<doub
 }
 
 template <int D>
-double DummyWalls<D>::interpolateFields(ParticleSet<D>& p, Index w, std::span<const Neighbour<D>> fluid) const {
+double DummyWalls<D>::interpolateFields(ParticleSet<D>& p, Index w, std::span<const Neighbour<D>> fluid,
+                                        const WallPoint<D>* point) const {
   // Fang eq. (46): the normalised interpolation with the volumes m_f/rho_f, for every flagged
-  // field (0 without fluid neighbours). Returns the weight sum sum_f (m_f/rho_f) W_wf.
+  // field (0 without fluid neighbours). Returns the weight sum sum_f (m_f/rho_f) W_wf. In a
+  // polar frame each fluid value is first turned to the wall particle's azimuth.
+  const WallPoint<D>* polar = point && point->polar ? point : nullptr;
   double vol_w = 0;
-  for (const Neighbour<D>& nb : fluid) vol_w += p.mass[nb.j] / p.density[nb.j] * nb.W;
+  Vec<D> mean_offset = Vec<D>::Zero();  // d~ = sum_f V_f W_wf (x_f - x_w) / vol_w
+  for (const Neighbour<D>& nb : fluid) {
+    const double vw = p.mass[nb.j] / p.density[nb.j] * nb.W;
+    vol_w += vw;
+    mean_offset -= vw * nb.rij;
+  }
+  // stress_extrapolation = "linear": the weights c_f = V_f W_wf (1/vol_w - (d_f - d~) . a),
+  // a = M^-1 d~, M = sum_f V_f W_wf (d_f - d~)(d_f - d~)^T, give f_w = f~ - d~ . G with G the
+  // weighted least-squares gradient of the fluid's values: the linear continuation of the field
+  // to the wall particle (exact for a linear field; sum_f c_f = 1, sum_f c_f d_f = 0). Where the
+  // fluid neighbours do not spread along every direction (the smallest eigenvalue of M/vol_w
+  // below (dx/5)^2: a deep dummy particle that reaches one fluid row) the Shepard average stays.
+  Vec<D> a = Vec<D>::Zero();
+  bool continued = false;  // the linear weights apply (else the plain average, as eq. 46 sums it)
+  if (vol_w > 0) {
+    mean_offset /= vol_w;
+    if (point && point->linear_stress) {
+      Rotation<D> M = Rotation<D>::Zero();
+      for (const Neighbour<D>& nb : fluid) {
+        const Vec<D> d = -nb.rij - mean_offset;
+        M += (p.mass[nb.j] / p.density[nb.j] * nb.W) * d * d.transpose();
+      }
+      const Eigen::SelfAdjointEigenSolver<Rotation<D>> eig(M / vol_w, Eigen::EigenvaluesOnly);
+      if (eig.eigenvalues().minCoeff() > 0.04 * dx_ * dx_) {
+        a = M.ldlt().solve(mean_offset);
+        continued = true;
+      }
+    }
+  }
+  const Vec<D> xw = p.x(w);
   for (Field* fp : interpolated_) {
     Field& f = *fp;
     const int nc = f.components;
     double* out = f.data.data() + static_cast<std::size_t>(nc) * w;
     for (int c = 0; c < nc; ++c) out[c] = 0.0;
+    if (!(vol_w > 0)) continue;
     for (const Neighbour<D>& nb : fluid) {
       const double vw = p.mass[nb.j] / p.density[nb.j] * nb.W;
+      const double weight = continued ? vw * (1.0 / vol_w - (-nb.rij - mean_offset).dot(a)) : vw;
       const double* src = f.data.data() + static_cast<std::size_t>(nc) * nb.j;
-      for (int c = 0; c < nc; ++c) out[c] += vw * src[c];
+      if (polar && f.transform != Field::Transform::invariant) {
+        double turned[9];  // at most D x D components (checked at the first update)
+        rotatedValue<D>(f, src, azimuthalRotation(*polar, xw, Vec<D>(xw - nb.rij), 1e-6 * dx_), turned);
+        for (int c = 0; c < nc; ++c) out[c] += weight * turned[c];
+        continue;
+      }
+      for (int c = 0; c < nc; ++c) out[c] += weight * src[c];
     }
-    if (vol_w > 0)
+    if (!continued)
       for (int c = 0; c < nc; ++c) out[c] /= vol_w;
   }
   return vol_w;

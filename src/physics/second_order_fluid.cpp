@@ -160,14 +160,17 @@ class SecondOrderFluid final : public PairEffect<D, SecondOrderFluid<D>> {
 
     extra_ = &s.particles.fields.require("extra_stress", symmetricComponents<D>());
     extra_->extrapolated_to_walls = true;
+    extra_->transform = Field::Transform::symmetric_tensor;
     if (procedure_ != 4) {
       elastic_ = &s.particles.fields.require("elastic_stress", D * D);
       elastic_->extrapolated_to_walls = true;  // Fang eq. (46) on wall particles
+      elastic_->transform = Field::Transform::tensor;
     }
     wall_velocity_ = s.particles.fields.find("wall_velocity");
     if (lagged_) {
       accel_ = &s.particles.fields.require("lagged_acceleration", D);
       accel_->extrapolated_to_walls = true;
+      accel_->transform = Field::Transform::vector;
       previous_velocity_.assign(s.particles.velocity.begin(), s.particles.velocity.begin() + D * s.particles.n_moving);
       const auto [nested, laplacian] = largestDerivativeSymbols<D>(s.kernel, s.spacing);
       // The alpha1 term of div(eps) is c1 div(G + G^T): c1 lap(a) for a transverse wave, twice

@@ -11,6 +11,8 @@
 
 #include <unistd.h>
 
+#include <Eigen/Geometry>  // cross products (frame = "polar" checks)
+
 namespace vesph {
 namespace {
 
@@ -111,6 +113,8 @@ struct Block {
   double normal_sign = 1;
   bool centroid = false;   // image wall: extrapolate from the centroid of P's weights
   double pressure_floor = -std::numeric_limits<double>::infinity();  // dummy wall, Pa
+  bool polar = false;      // dummy wall of a round shape: averaged in its polar frame
+  bool linear_stress = false;  // dummy wall: stresses continued linearly from the fluid
   bool hydrostatic = false;              // fluid: hydrostatic initial density
   std::optional<double> surface_height{};  // its free surface, m along -g (absent: the block's top)
 
@@ -153,7 +157,10 @@ class BlockReader {
         if (b.has(key)) b.fail(key, "no " + std::string(key) + " on a wall block (a fluid block's initial density)");
     }
     block.solid = readSolid(b, shape, true);
-    if (kind == "wall") readWallTreatment(b, block);
+    if (kind == "wall") readWallTreatment(b, block, shape);
+    else
+      for (const char* key : {"frame", "stress_extrapolation"})
+        if (b.has(key)) b.fail(key, std::string("no ") + key + " on a fluid block (it sets how a wall takes the fluid's values)");
     else if (b.has("pressure_floor")) b.fail("pressure_floor", "no pressure_floor on a fluid block (it bounds a wall's pressure)");
     if (block.image && shape != "box")
       b.fail("treatment", "\"dummy\" for a " + shape + " (image walls are boxes facing a coordinate axis)");
@@ -222,8 +229,16 @@ class BlockReader {
 
   // Per wall: vesph's dummy layers (Adami et al. 2012) or Fang's boundary particles on the
   // wall surface plus image particles behind it (include/vesph/boundary/dummy_walls.hpp).
-  static void readWallTreatment(ConfigTable& b, Block<D>& block) {
+  static void readWallTreatment(ConfigTable& b, Block<D>& block, const std::string& shape) {
     block.image = b.choice("treatment", "dummy", {"dummy", "image"}) == "image";
+    if (b.has("frame")) readWallFrame(b, block, shape);
+    if (b.has("stress_extrapolation")) {
+      // The stresses on the wall particles: Fang eq. (46)'s average, or its linear continuation
+      // (include/vesph/boundary/dummy_walls.hpp, docs/theory.md §6.3).
+      block.linear_stress = b.choice("stress_extrapolation", "shepard", {"shepard", "linear"}) == "linear";
+      if (block.linear_stress && block.image)
+        b.fail("stress_extrapolation", "\"shepard\" with treatment = \"image\" (Fang's eq. 48 extrapolates those)");
+    }
     if (block.image) {
       std::tie(block.normal_axis, block.normal_sign) = b.coordinateAxis<D>(
           "normal", "a coordinate unit vector pointing from the wall into the fluid, e.g. [0.0, 1.0] for a floor");
@@ -235,6 +250,37 @@ class BlockReader {
       if (block.image) b.fail("pressure_floor", "no pressure_floor with treatment = \"image\" (dummy layers only)");
       block.pressure_floor = b.number("pressure_floor", std::nullopt, Bound::any, "Pa");
     }
+  }
+
+  // frame = "polar": the dummy layers of a round wall average the fluid's velocities and
+  // stresses in the polar frame of the block's axis (include/vesph/boundary/dummy_walls.hpp,
+  // docs/theory.md §6.3). The axis must stay where it is: a wall at rest or turning about it.
+  static void readWallFrame(ConfigTable& b, Block<D>& block, const std::string& shape) {
+    block.polar = b.choice("frame", "cartesian", {"cartesian", "polar"}) == "polar";
+    if (!block.polar) return;
+    const bool round = block.solid.kind == ShapeKind::cylinder || block.solid.kind == ShapeKind::tube ||
+                       (D == 2 && block.solid.kind == ShapeKind::ball);
+    if (!round)
+      b.fail("frame", "\"cartesian\" for a " + shape + " (a polar frame needs an axis: a cylinder or tube" +
+                          (D == 2 ? std::string(" or disk") : std::string()) + ")");
+    if (block.image) b.fail("frame", "\"cartesian\" with treatment = \"image\" (polar frames are for dummy layers)");
+    if (b.has("velocity"))
+      b.fail("frame", "\"cartesian\" on a translating wall (the polar frame's axis is fixed: a wall at rest or turning about its own axis)");
+    if (!b.has("angular_velocity")) return;
+    // Turning: about the block's own axis (the moving walls read and check the motion itself).
+    const Vec<D> point = b.has("axis_point") ? b.vector<D>("axis_point", std::nullopt, "m") : block.solid.centre;
+    const double size = std::max(block.solid.radius, 1e-300);
+    Vec<D> offset = point - block.solid.centre;
+    bool about_own_axis = true;
+    if constexpr (D == 3) {
+      const Vec<3> w = b.vector<3>("angular_velocity", std::nullopt, "rad/s; in 3D the vector omega");
+      const double wn = w.norm();
+      offset -= offset.dot(block.solid.axis) * block.solid.axis;
+      about_own_axis = wn == 0 || (w / wn).cross(block.solid.axis).norm() <= 1e-9;
+    }
+    if (!about_own_axis || offset.norm() > 1e-9 * size)
+      b.fail("frame", "\"cartesian\" on a wall turning about another axis than its own (angular_velocity along the "
+                      "block's axis, axis_point on it, for frame = \"polar\")");
   }
 
   void checkBoxExtent(ConfigTable& b, const Solid<D>& box) const {
@@ -500,6 +546,12 @@ class LatticePlacer {
     if (kind == ParticleKind::wall && !b.image) {
       WallPoint<D> w;
       w.pressure_floor = b.pressure_floor;
+      w.linear_stress = b.linear_stress;
+      if (b.polar) {
+        w.polar = true;
+        w.axis_point = b.solid.centre;
+        w.axis = b.solid.axis;
+      }
       wall_points_.push_back(w);
     }
     const Vec<D> d = jitter(b);
@@ -753,10 +805,10 @@ std::vector<WallPoint<D>> generateParticles(ConfigTable& root, const LatticeGeom
       summaries->push_back(s);
     }
   }
-  // Scenes without image walls or pressure floors keep no per-wall-particle record
+  // Scenes without image walls, pressure floors, polar frames or linear stresses keep no per-wall-particle record
   // (DummyWalls treats an empty one as all dummy layers without a floor).
   if (std::none_of(wall_points.begin(), wall_points.end(),
-                   [](const WallPoint<D>& w) { return w.image || std::isfinite(w.pressure_floor); }))
+                   [](const WallPoint<D>& w) { return w.image || w.polar || w.linear_stress || std::isfinite(w.pressure_floor); }))
     std::vector<WallPoint<D>>().swap(wall_points);
   return wall_points;
 }

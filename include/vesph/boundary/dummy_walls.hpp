@@ -34,6 +34,25 @@
 //     that centroid (about 0.2 dx further from the wall), not at P, so the literal d_P
 //     ("fang") extrapolates a linear profile with the wrong slope. Measured in the Poiseuille
 //     channel: 0.72 % ("fang") against 0.18 % ("centroid") at t = 0.1125 s (validation §1).
+//
+// Per dummy-layer wall block of a round shape (cylinder, tube, 2D disk) with frame = "polar":
+// the fluid's velocities and the fields above are averaged in the block's polar frame. Each
+// fluid neighbour's vector f is turned to R f, its tensor S to R S R^T, R the rotation about
+// the block's axis that takes the fluid particle's azimuth to the wall particle's (and its
+// position to R (x_f - c) + c for the rigid-motion term), so that the averages mean the same
+// components (radial, azimuthal, axial) for every neighbour. Near a wall whose radius is a few
+// spacings the Cartesian average runs over up to +-90 degrees of azimuth and cancels most of
+// an azimuthal velocity or a shear stress (docs/theory.md §6.3: the rod of radius 2 dx passed
+// 0.21 of the Couette shear stress to its first fluid ring); for an axisymmetric flow the
+// polar average is exact for a uniform field in polar components. A wall particle on the axis
+// keeps the Cartesian average (its azimuth is undefined).
+// Per dummy-layer wall block with stress_extrapolation = "linear": the flagged fields are not
+// the Shepard average of eq. (46), which is the value at the centroid of the fluid neighbours
+// (about a support's half-width inside the fluid), but its weighted least-squares linear
+// continuation to the wall particle, f_w = f~ + (x_w - x~) . G (docs/theory.md §6.3): the
+// stress divergence on the first fluid rows then sees the stress gradient continue into the
+// wall, as the viscous term sees the mirrored velocity. Opt-in: a gradient of noisy stresses
+// near a free surface is amplified by the extrapolation distance.
 // The fluid must start one spacing from the wall surface (Fang's Fig. 1: the fluid lattice
 // continues the wall's), i.e. a fluid block's edge half a spacing off the surface.
 // The extrapolated velocity is the wall particle's ghost velocity (field wall_velocity, used by
@@ -58,6 +77,14 @@ struct WallPoint {
   // Dummy layers: the extrapolated pressure is not allowed below this value (Pa; -inf: no
   // floor). At 0 the wall pushes the fluid but never pulls it (docs/theory.md §6).
   double pressure_floor = -std::numeric_limits<double>::infinity();
+  // Dummy layers of a round block averaged in its polar frame (above): the axis through
+  // axis_point along axis (3D; in 2D the axis is z and `axis` is unused).
+  bool polar = false;
+  // Dummy layers, stress_extrapolation = "linear": the flagged fields (stresses) continued
+  // linearly from the fluid to the particle instead of Fang eq. (46)'s average (below).
+  bool linear_stress = false;
+  Vec<D> axis_point = Vec<D>::Zero();
+  Vec<D> axis = Vec<D>::Zero();
 };
 
 template <int D>
@@ -91,9 +118,13 @@ class DummyWalls final : public Boundary<D> {
   std::vector<char> is_stress_;   // per interpolated field: a stress tensor (n.S.n = 0 on the wall)
   bool any_image_ = false;
   bool any_floor_ = false;        // some wall particle has a finite pressure_floor
+  bool any_polar_ = false;        // some wall particle averages in a polar frame
   bool ambient_inlet_ = false;
 
-  double interpolateFields(ParticleSet<D>& p, Index w, std::span<const Neighbour<D>> fluid) const;
+  // Fang eq. (46) for the flagged fields, in the wall point's polar frame and/or continued
+  // linearly where it says so (point null: neither).
+  double interpolateFields(ParticleSet<D>& p, Index w, std::span<const Neighbour<D>> fluid,
+                           const WallPoint<D>* point) const;
   void imageParticle(const RhsContext<D>& ctx, const NeighbourList<D>& list, Index w);
 };
 

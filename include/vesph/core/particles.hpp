@@ -26,6 +26,12 @@ struct Field {
   // Wall particles get this field by the normalised SPH interpolation of Fang et al. eq. (46)
   // from their fluid neighbours (vesph/boundary/dummy_walls.hpp); needs Range::all.
   bool extrapolated_to_walls = false;
+  // How the components turn with the frame: walls averaged in a polar frame ([[blocks]]
+  // frame = "polar", vesph/boundary/dummy_walls.hpp) rotate each fluid value R f (vector),
+  // R S R^T (tensor: packed symmetric D (D + 1) / 2 components, or full D x D row-major) before
+  // the average. Scalars (and any field left `invariant`) are averaged as they are.
+  enum class Transform { invariant, vector, symmetric_tensor, tensor };
+  Transform transform = Transform::invariant;
   std::vector<double> data;
 
   double* at(std::size_t k) { return data.data() + k * components; }

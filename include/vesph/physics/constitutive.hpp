@@ -94,6 +94,7 @@ class ConstitutiveEffect : public Effect<D> {
     kappa_ = kappa;
     stress_ = &s.particles.fields.require("elastic_stress", symmetricComponents<D>());
     stress_->extrapolated_to_walls = true;  // Fang eq. (46) on wall particles
+    stress_->transform = Field::Transform::symmetric_tensor;
     slot_ = s.evolve(*stress_);
     if constexpr (outOfPlane()) {
       zz_ = &s.particles.fields.require("elastic_stress_zz", 1);
@@ -102,6 +103,7 @@ class ConstitutiveEffect : public Effect<D> {
     }
     extra_ = &s.particles.fields.require("extra_stress", symmetricComponents<D>());
     extra_->extrapolated_to_walls = true;
+    extra_->transform = Field::Transform::symmetric_tensor;
     solvent_viscosity_ = s.viscosity;
     // The solvent stress eta_s (kappa + kappa^T) goes into extra_stress; it acts only through
     // [effects.viscosity]. Without it the output would show a stress no force applies.
