@@ -29,3 +29,28 @@ finish() {
   echo "$PASSED passed, $FAILED failed"
   [ "$FAILED" = 0 ]
 }
+# The Poiseuille start-up (docs/validation.md §1) at 100 times the demo's viscosity and body
+# force (the same steady speed; the comparison times scaled by 1/100), where the explicit viscous
+# limit 0.125 h^2/nu = 2e-6 s is 28 times below the acoustic one (tests/cli/imex.sh,
+# tests/cli/semi_implicit.sh); word-split on use.
+STIFF_POISEUILLE="--set fluid.viscosity=0.1 --set effects.body_force.acceleration=[0.02,0.0] --set time.end=0.005
+                  --set output.times=[0.000225,0.00045,0.001125,0.005]"
+median_step() {  # median accepted step of a run's diagnostics
+  $PY -c "import sys, h5py, numpy; print(numpy.median(h5py.File(sys.argv[1], 'r')['diagnostics/dt'][:]))" "$1"
+}
+# stiff_poiseuille LABEL DIR INTEGRATOR-ARGS...: that start-up with the given integrator keys:
+# the Poiseuille check (2 % of the centreline velocity at every comparison time) and a median
+# accepted step of at least 20 times the viscous limit.
+stiff_poiseuille() {
+  label=$1; dir=$WORK/$2; shift 2
+  viscous_limit=2e-6  # 0.125 h^2/nu, h = 4e-5 m, nu = 1e-4 m^2/s
+  # shellcheck disable=SC2086
+  expect 0 "ok: finished" -- "$VESPH" run "$SCENE" -o "$dir" --quiet $STIFF_POISEUILLE "$@"
+  $PY "$SRC/tools/poiseuille_check.py" "$dir/poiseuille_newtonian.h5" --times 0.000225 0.00045 0.001125 0.005 \
+    > "$WORK/check.log" 2>&1 && pass || fail "$label: Poiseuille validation failed: $(cat "$WORK/check.log")"
+  grep -E "RESULT" "$WORK/check.log"
+  dt=$(median_step "$dir/poiseuille_newtonian.h5")
+  echo "$label: median step $dt s ($viscous_limit s viscous limit)"
+  $PY -c "import sys; sys.exit(0 if float(sys.argv[1]) >= 20 * float(sys.argv[2]) * (1 - 1e-9) else 1)" "$dt" "$viscous_limit" \
+    && pass || fail "$label: median step $dt s is not 20 times the viscous limit $viscous_limit s"
+}
