@@ -253,7 +253,7 @@ def make_die_swell_convergence_tests(tmp):
         expect({k: v for k, v in s.items() if k not in ("name", "output")}
                == {k: v for k, v in base.items() if k not in ("name", "output")},
                f"25 across, Re 0.5 differs from the case: {s}")
-        for n in (10, 16, 40):
+        for n in (10, 13, 16, 20, 40):
             for re in (0.5, 0.01):
                 s = dsc.scene(n, re)
                 back = tomllib.loads(dss.toml_dumps(s))

@@ -115,16 +115,18 @@ def scene(n, re, variant=None, end=None, interval=None):
     v = variant or {}
     with open(CASE, "rb") as fh:
         s = copy.deepcopy(tomllib.load(fh))
+    # The geometry at full precision (not rounded): every block must be a whole number of
+    # spacings, and W/13 has no short decimal form.
     dx = W / n
     depth = 5 * dx                       # dummy layers / buffer columns >= support 4.8 dx
     s["name"] = label(re, n)
-    s["particles"]["spacing"] = g6(dx)
-    s["domain"]["min"] = [g6(DIE_INLET - depth), s["domain"]["min"][1]]
+    s["particles"]["spacing"] = dx
+    s["domain"]["min"] = [DIE_INLET - depth, s["domain"]["min"][1]]
     fluid, lower, upper = s["blocks"]
     fluid["min"], fluid["max"] = [DIE_INLET, 0.0], [DIE_EXIT, W]
-    lower["min"], lower["max"] = [g6(DIE_INLET - depth), g6(-depth)], [DIE_EXIT, 0.0]
-    upper["min"], upper["max"] = [g6(DIE_INLET - depth), W], [DIE_EXIT, g6(W + depth)]
-    s["inflow"]["min"], s["inflow"]["max"] = [g6(DIE_INLET - depth), 0.0], [DIE_INLET, W]
+    lower["min"], lower["max"] = [DIE_INLET - depth, -depth], [DIE_EXIT, 0.0]
+    upper["min"], upper["max"] = [DIE_INLET - depth, W], [DIE_EXIT, W + depth]
+    s["inflow"]["min"], s["inflow"]["max"] = [DIE_INLET - depth, 0.0], [DIE_INLET, W]
     s["fluid"]["viscosity"] = g6(viscosity(re))
     e = s["effects"]
     e["equation_of_state"]["sound_speed"] = g6(v["sound_speed"] if v.get("sound_speed") is not None
