@@ -330,6 +330,14 @@ def make_die_swell_convergence_tests(tmp):
         env = next(r for r in rich if r["measure"] == "envelope")
         expect(env["status"] == "unchanged" and abs(float(env["extrapolated"]) - 1.2) < 1e-9,
                f"richardson {env}", out)
+        rc, out, err = tool("die_swell_study.py", "convergence", "--compare", "--re", "0.5",
+                            "--out", os.path.join(d, "tab"))
+        expect(rc == 0 and out.count("convergence ") == 3 and " 1.200 +-0.033" in out
+               and os.path.exists(os.path.join(d, "tab", "convergence_variants.png")),
+               f"--compare: exit {rc}", out + err)
+        rc, out, err = tool("die_swell_study.py", "convergence", "--compare", "--re", "7",
+                            "--out", os.path.join(d, "tab"))
+        expect(rc == 1 and "no convergence" in out, f"--compare at a Re never run: exit {rc}", out + err)
 
     return [("die_swell_study convergence: observed order and Richardson value (equal and unequal "
              "ratios, oscillatory, diverging, flagged orders)", richardson),

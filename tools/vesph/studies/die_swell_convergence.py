@@ -7,7 +7,7 @@ Usage
         [--across N N N ...] [--re RE ...] [--end T] [--interval T] [--stations X ...]
         [--wall-floor P] [--xsph EPS] [--delta D] [--shifting A] [--sound-speed C]
         [--integrator TYPE] [--jobs J] [--out DIR] [--vesph PATH]
-        [--dry-run] [--measure-only] [--no-png]
+        [--dry-run] [--measure-only] [--no-png] [--compare]
 
 Runs the Newtonian planar die of cases/die_swell_newtonian.toml (W = 0.01 m, exit x = 0.2 m,
 rho = 1000 kg/m^3, feed of mean velocity U = 0.5 m/s, delta-SPH 0.1 + XSPH 0.5, leapfrog) at
@@ -47,6 +47,12 @@ measure's files), OUT/convergence[SUFFIX]/convergence[SUFFIX].csv (one row per r
 ..._richardson.csv (one row per Re and measure), ..._richardson.txt (the verdicts) and
 ..._swell.png (swell against dx/W, the extrapolated values at 0, the finite-element band
 1.186-1.20 of creeping planar flow).
+
+--compare runs nothing: it reads every OUT/convergence*/convergence*.csv (the case and each
+variant measured so far; the folders' CSVs hold the runs of their last invocation, so run
+--measure-only over all the resolutions of a folder first), prints one table (swell per variant
+and resolution) and plots envelope and flux against dx/W per variant at the first --re in
+OUT/convergence_variants.png.
 
 Exit status: 0 when every run was made or tabulated; 1 when a run could not be measured at
 all; 2 for bad arguments.
@@ -367,6 +373,57 @@ def plot(rows, rich, png, title):
     plt.close(fig)
 
 
+def compare(out, re, png=True):
+    """The table and figure of --compare (see the module docstring)."""
+    import glob
+
+    series = {}
+    for path in sorted(glob.glob(os.path.join(out, "convergence*", "convergence*.csv"))):
+        name = os.path.basename(os.path.dirname(path))
+        if os.path.basename(path) != name + ".csv":
+            continue                      # the _richardson.csv beside it
+        with open(path, newline="") as fh:
+            rows = [r for r in csv.DictReader(fh) if float(r["Re"]) == re]
+        if rows:
+            series[name] = sorted(rows, key=lambda r: int(r["across"]))
+    if not series:
+        print(f"no convergence*.csv with Re = {re:g} under {out}")
+        return 1
+    num = lambda r, k: float(r[k]) if r.get(k) not in (None, "") else math.nan  # noqa: E731
+    print(f"== die swell variants at Re = {re:g} (steady mean +- std over the window)")
+    print(f"   {'variant':<34}{'N':>4}{'envelope':>16}{'filled':>9}{'flux':>16}{'wall s':>8}")
+    for name, rows in series.items():
+        for r in rows:
+            print(f"   {name:<34}{int(r['across']):>4}"
+                  f"{num(r, 'envelope'):>9.3f} +-{num(r, 'envelope_std'):.3f}{num(r, 'filled'):>9.3f}"
+                  f"{num(r, 'flux'):>9.3f} +-{num(r, 'flux_std'):.3f}{num(r, 'wall_s'):>8.0f}")
+    if not png:
+        return 0
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.5), sharey=True)
+    for ax, q in zip(axes, ("envelope", "flux")):
+        ax.axhspan(*FE_BAND, color="0.85", label="finite elements, creeping flow")
+        for name, rows in series.items():
+            x = [1.0 / int(r["across"]) for r in rows]
+            ax.errorbar(x, [num(r, q) for r in rows], yerr=[num(r, q + "_std") for r in rows],
+                        marker="o", capsize=3, label=name.replace("convergence", "case") or "case")
+        ax.set_xlim(left=0.0)
+        ax.set_xlabel("dx / W")
+        ax.set_title(f"{q} swell, Re = {re:g}")
+        ax.grid(alpha=0.3)
+    axes[0].set_ylabel("steady swell ratio")
+    axes[1].legend(fontsize=7)
+    fig.tight_layout()
+    fn = os.path.join(out, "convergence_variants.png")
+    fig.savefig(fn, dpi=120)
+    plt.close(fig)
+    print(f"wrote {fn}")
+    return 0
+
+
 def run_one(scene_path, d, vesph):
     t0 = time.time()
     with open(os.path.join(d, "run.log"), "w") as log:
@@ -399,7 +456,11 @@ def main(argv=None):
     ap.add_argument("--dry-run", action="store_true")
     ap.add_argument("--measure-only", action="store_true")
     ap.add_argument("--no-png", action="store_true")
+    ap.add_argument("--compare", action="store_true",
+                    help="run nothing: tabulate and plot every OUT/convergence* study at the first --re")
     a = ap.parse_args(argv)
+    if a.compare:
+        return compare(a.out, a.re[0], png=not a.no_png)
     if min(a.across) < 5 or len(set(a.across)) != len(a.across):
         ap.error("--across: distinct resolutions of at least 5 particles across the die")
     if min(a.re) <= 0:
