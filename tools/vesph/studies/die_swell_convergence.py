@@ -356,8 +356,10 @@ def plot(rows, rich, png, title):
         for q in MEASURES:
             x = [1.0 / r["across"] for r in sel]
             y = [r.get(q, math.nan) for r in sel]
-            line, = ax.plot(x, y, marks[q], color=color, label=f"Re = {re:g}: {q}")
-            color = line.get_color()
+            err = [r.get(q + "_std", math.nan) for r in sel]
+            cont = ax.errorbar(x, y, yerr=[e if math.isfinite(e) else 0.0 for e in err], fmt=marks[q],
+                               color=color, capsize=3, label=f"Re = {re:g}: {q} (± std over the window)")
+            color = cont.lines[0].get_color()
             o = next((o for o in rich if o["Re"] == re and o["measure"] == q), None)
             if o and math.isfinite(o["extrapolated"]):
                 ax.plot([0.0], [o["extrapolated"]], marks[q][0], color=color, mfc="none", ms=9)
