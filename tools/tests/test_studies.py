@@ -199,6 +199,154 @@ def make_die_swell_study_tests(tmp):
             ("die_swell_study: bad arguments", bad_arguments)]
 
 
+def make_die_swell_convergence_tests(tmp):
+    import math
+    import tomllib
+    from vesph.studies import die_swell as dss
+    from vesph.studies import die_swell_convergence as dsc
+
+    d = os.path.join(tmp, "die_swell_convergence")
+    os.makedirs(d, exist_ok=True)
+
+    def richardson():
+        # phi = phi_ext + C h^p on h = 1/N: the observed order and the extrapolated value come
+        # back exactly, for equal and unequal refinement ratios and either order of the input.
+        for p, ns in ((2.0, (10, 20, 40)), (1.0, (10, 16, 25)), (1.5, (25, 16, 10, 50)),
+                      (0.7, (12, 30, 18))):
+            vals = [1.19 + 0.8 * (1.0 / n) ** p for n in ns]
+            o = dsc.observed_order(ns, vals)
+            fine = sorted(ns, reverse=True)[:3]
+            expect(o["status"] == "monotone" and o["n"] == fine and abs(o["p"] - p) < 1e-9
+                   and abs(o["extrapolated"] - 1.19) < 1e-9 and o["asymptotic"],
+                   f"p = {p}, N = {ns}: {o}")
+            # GCI_fine = 1.25 |e21| / phi1 / (r^p - 1): here 1.25 |phi1 - phi_ext| / phi1
+            expect(abs(o["gci"] - 1.25 * (vals[ns.index(fine[0])] - 1.19) / vals[ns.index(fine[0])])
+                   < 1e-9, f"GCI {o['gci']}")
+        # falling towards the limit from above and from below alike
+        o = dsc.observed_order((10, 16, 25), [1.05 - 2.0 / n ** 2 for n in (10, 16, 25)])
+        expect(o["status"] == "monotone" and abs(o["p"] - 2) < 1e-9 and abs(o["extrapolated"] - 1.05) < 1e-9,
+               f"from below: {o}")
+        # not monotone: no extrapolated value, a message that says so
+        o = dsc.observed_order((10, 16, 25), (1.19, 1.09, 1.12))
+        expect(o["status"] == "oscillatory" and math.isnan(o["extrapolated"])
+               and "not monotone" in o["message"] and not o["asymptotic"], f"oscillatory: {o}")
+        # monotone but the changes grow under refinement: order <= 0, no value
+        o = dsc.observed_order((10, 20, 40), (1.19, 1.17, 1.12))
+        expect(o["status"] == "diverging" and o["p"] < 0 and math.isnan(o["extrapolated"])
+               and "not converging" in o["message"], f"diverging: {o}")
+        # a very high order: a value, flagged as outside the asymptotic range
+        o = dsc.observed_order((10, 20, 40), (1.3, 1.2, 1.19999))
+        expect(o["status"] == "monotone" and o["p"] > 4 and not o["asymptotic"]
+               and "not reliable" in o["message"], f"order > 4: {o}")
+        o = dsc.observed_order((10, 16, 25), (1.1, 1.1, 1.1))
+        expect(o["status"] == "unchanged" and o["extrapolated"] == 1.1, f"unchanged: {o}")
+        o = dsc.observed_order((10, 16), (1.2, 1.1))
+        expect(o["status"] == "too_few" and math.isnan(o["p"]), f"two resolutions: {o}")
+        o = dsc.observed_order((10, 16, 25), (1.2, float("nan"), 1.1))
+        expect(o["status"] == "undefined", f"a missing value: {o}")
+
+    def scenes():
+        with open(dsc.CASE, "rb") as fh:
+            base = tomllib.load(fh)
+        # 25 across at Re = 0.5 is the case itself, but for the frames' interval and the name
+        s = dsc.scene(25, 0.5)
+        expect({k: v for k, v in s.items() if k not in ("name", "output")}
+               == {k: v for k, v in base.items() if k not in ("name", "output")},
+               f"25 across, Re 0.5 differs from the case: {s}")
+        for n in (10, 13, 16, 20, 40):
+            for re in (0.5, 0.01):
+                s = dsc.scene(n, re)
+                back = tomllib.loads(dss.toml_dumps(s))
+                expect(back == s, f"{n} across, Re {re}: the TOML does not read back")
+                dx = s["particles"]["spacing"]
+                lower, upper = s["blocks"][1], s["blocks"][2]
+                expect(abs(dx * n - dsc.W) < 1e-9
+                       and abs(-lower["min"][1] - 5 * dx) < 1e-9 and abs(upper["max"][1] - dsc.W - 5 * dx) < 1e-9
+                       and abs(s["inflow"]["max"][0] - s["inflow"]["min"][0] - 5 * dx) < 1e-9
+                       and s["domain"]["min"][0] <= s["inflow"]["min"][0],
+                       f"{n} across: geometry {s['blocks']}, {s['inflow']}")
+                mu, c = s["fluid"]["viscosity"], s["effects"]["equation_of_state"]["sound_speed"]
+                # Re = rho W U / mu, and the die's pressure drop 12 mu U L / W^2 the same share
+                # of rho c^2 as the case's (1.9 %)
+                expect(abs(1000.0 * 0.01 * 0.5 / mu - re) < 1e-6 * re
+                       and abs(12 * mu * 0.5 * 0.05 / 0.01 ** 2 / (1000.0 * c ** 2) - 0.01875) < 1e-5,
+                       f"Re {re}: mu {mu}, c {c}")
+        # each variant changes one thing
+        ref = dsc.scene(10, 0.5)
+        for v, changed in (({"wall_floor": 0.0}, "pressure_floor"), ({"xsph": 0.0}, "xsph off"),
+                           ({"xsph": 0.25}, "xsph 0.25"), ({"delta": 0.02}, "delta"),
+                           ({"delta": 0.0}, "delta off"), ({"shifting": 1.0}, "shifting"),
+                           ({"sound_speed": 80.0}, "c")):
+            s = dsc.scene(10, 0.5, v)
+            e, e0 = s["effects"], ref["effects"]
+            ok = {"pressure_floor": lambda: s["blocks"][1].get("pressure_floor") == 0.0
+                  and s["blocks"][2].get("pressure_floor") == 0.0 and e == e0,
+                  "xsph off": lambda: "xsph" not in e and s["blocks"] == ref["blocks"],
+                  "xsph 0.25": lambda: e["xsph"] == {"epsilon": 0.25},
+                  "delta": lambda: e["density_diffusion"] == {"delta": 0.02},
+                  "delta off": lambda: "density_diffusion" not in e,
+                  "shifting": lambda: e["particle_shifting"] == {"coefficient": 1.0, "speed": 0.5}
+                  and e["free_surface"] == {"threshold": 0.8},
+                  "c": lambda: e["equation_of_state"]["sound_speed"] == 80.0}[changed]()
+            others = {k: x for k, x in s.items() if k not in ("effects", "blocks")} == \
+                {k: x for k, x in ref.items() if k not in ("effects", "blocks")}
+            expect(ok and others, f"variant {v}: {s}")
+            expect(dsc.variant_suffix(v) != "", f"variant {v} has no folder suffix")
+        expect(dsc.variant_suffix({"wall_floor": None, "xsph": None, "delta": None, "shifting": 0.0,
+                                   "sound_speed": None, "integrator": None}) == "", "no variant: no suffix")
+
+    def command():
+        rc, out, err = tool("die_swell_study.py", "convergence", "--across", "10", "16", "--re", "0.5",
+                            "--xsph", "0", "--end", "0.2", "--dry-run", "--out", d)
+        sp = os.path.join(d, "convergence_xsph0", "re0.5_n16", "re0.5_n16.toml")
+        expect(rc == 0 and os.path.exists(sp) and out.count(" run ") == 2, f"dry run: exit {rc}", out + err)
+        with open(sp, "rb") as fh:
+            s = tomllib.load(fh)
+        expect(s["time"]["end"] == 0.2 and "xsph" not in s["effects"], f"scene written: {s}")
+        for bad in (["--across", "3", "10", "16"], ["--re", "0"], ["--stations", "0.19"],
+                    ["--xsph", "2"], ["--across", "10", "10", "16"]):
+            rc, out, err = tool("die_swell_study.py", "convergence", *bad, "--dry-run", "--out", d)
+            expect(rc == 2, f"{bad}: exit {rc}", out + err)
+
+    def tabulation():
+        # Three synthetic runs (the support's die-swell output: the extrudate 29, 31, 30 rows of
+        # 25 over the later half, mean 1.2) tabulate; equal values give "unchanged".
+        sd = os.path.join(d, "tab", "convergence")
+        for n in (10, 16, 25):
+            lab = dsc.label(0.5, n)
+            rd = os.path.join(sd, lab)
+            os.makedirs(rd, exist_ok=True)
+            write_die_swell(os.path.join(rd, lab + ".h5"))
+            with open(os.path.join(rd, "summary.json"), "w") as fh:
+                json.dump({"status": "ok", "final_time": 0.8, "steps": 800, "wall_seconds": 2.5}, fh)
+        rc, out, err = tool("die_swell_study.py", "convergence", "--across", "10", "16", "25", "--re", "0.5",
+                            "--measure-only", "--out", os.path.join(d, "tab"), "--no-png")
+        expect(rc == 0, f"--measure-only: exit {rc}", out + err)
+        rows = read_csv_rows(os.path.join(sd, "convergence.csv"))
+        expect(len(rows) == 3 and all(abs(float(r["envelope"]) - 1.2) < 1e-9 for r in rows)
+               and all(math.isfinite(float(r["flux"])) for r in rows),
+               f"rows {rows}", out)
+        rich = read_csv_rows(os.path.join(sd, "convergence_richardson.csv"))
+        env = next(r for r in rich if r["measure"] == "envelope")
+        expect(env["status"] == "unchanged" and abs(float(env["extrapolated"]) - 1.2) < 1e-9,
+               f"richardson {env}", out)
+        rc, out, err = tool("die_swell_study.py", "convergence", "--compare", "--re", "0.5",
+                            "--out", os.path.join(d, "tab"))
+        expect(rc == 0 and out.count("convergence ") == 3 and " 1.200 +-0.033" in out
+               and os.path.exists(os.path.join(d, "tab", "convergence_variants.png")),
+               f"--compare: exit {rc}", out + err)
+        rc, out, err = tool("die_swell_study.py", "convergence", "--compare", "--re", "7",
+                            "--out", os.path.join(d, "tab"))
+        expect(rc == 1 and "no convergence" in out, f"--compare at a Re never run: exit {rc}", out + err)
+
+    return [("die_swell_study convergence: observed order and Richardson value (equal and unequal "
+             "ratios, oscillatory, diverging, flagged orders)", richardson),
+            ("die_swell_study convergence: scenes (the case at 25 across, Re and c scaling, one change "
+             "per variant)", scenes),
+            ("die_swell_study convergence: the command line (dry run, bad arguments)", command),
+            ("die_swell_study convergence: --measure-only tabulation", tabulation)]
+
+
 def make_peer_dam_break_tests(tmp):
     from vesph.studies import peer_dam_break as pdb
 
@@ -225,4 +373,5 @@ def make_peer_dam_break_tests(tmp):
 
 
 # unittest collects the groups above through load_tests
-load_tests = load_tests_of(make_die_swell_study_tests, make_peer_dam_break_tests)
+load_tests = load_tests_of(make_die_swell_study_tests, make_die_swell_convergence_tests,
+                            make_peer_dam_break_tests)

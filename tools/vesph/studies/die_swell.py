@@ -9,6 +9,11 @@ Usage
         [--surface-condition] [--jobs J] [--out DIR] [--vesph PATH]
         [--only LABEL ...] [--dry-run] [--measure-only] [--no-png]
 
+    /usr/bin/python3 tools/die_swell_study.py convergence [--across N N N] [--re RE ...] [...]
+        the Newtonian die (cases/die_swell_newtonian.toml) under refinement, with the
+        Richardson-extrapolated swell and the observed order: its own options, see
+        vesph/studies/die_swell_convergence.py (`die_swell_study.py convergence --help`)
+
 STUDY is one of (thesis §4.4; v is the centreline velocity, De = |alpha1| v / (mu W),
 Re = rho W v / mu with rho = 1000 kg/m^3, mu = 10 Pa s, W = 0.01 m; alpha2 = -0.1 alpha1):
 
@@ -492,6 +497,12 @@ def plot(study, rows, png, title=None):
 
 
 def main(argv=None):
+    args = sys.argv[1:] if argv is None else list(argv)
+    if args[:1] == ["convergence"]:
+        # The Newtonian die under refinement has its own options (several resolutions and
+        # Reynolds numbers, one variant of the case): vesph/studies/die_swell_convergence.py.
+        from vesph.studies import die_swell_convergence
+        return die_swell_convergence.main(args[1:])
     ap = argparse.ArgumentParser(prog="die_swell_study.py", description=__doc__.split("\n")[0])
     ap.add_argument("studies", nargs="+", choices=STUDIES, metavar="STUDY",
                     help="one or more of " + ", ".join(STUDIES))
@@ -521,7 +532,7 @@ def main(argv=None):
     ap.add_argument("--dry-run", action="store_true")
     ap.add_argument("--measure-only", action="store_true")
     ap.add_argument("--no-png", action="store_true")
-    a = ap.parse_args(argv)
+    a = ap.parse_args(args)
     if a.across < 5:
         ap.error("--across must be >= 5 (particles across the die)")
     if a.shifting < 0:

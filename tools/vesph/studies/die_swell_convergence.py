@@ -1,0 +1,560 @@
+#!/usr/bin/python3
+"""The Newtonian die swell under refinement: `die_swell_study.py convergence` (issue 35).
+
+Usage
+-----
+    /usr/bin/python3 tools/die_swell_study.py convergence
+        [--across N N N ...] [--re RE ...] [--end T] [--interval T] [--stations X ...]
+        [--wall-floor P] [--xsph EPS] [--delta D] [--shifting A] [--sound-speed C]
+        [--integrator TYPE] [--jobs J] [--out DIR] [--vesph PATH]
+        [--dry-run] [--measure-only] [--no-png] [--compare]
+
+Runs the Newtonian planar die of cases/die_swell_newtonian.toml (W = 0.01 m, exit x = 0.2 m,
+rho = 1000 kg/m^3, feed of mean velocity U = 0.5 m/s, delta-SPH 0.1 + XSPH 0.5, leapfrog) at
+each resolution --across (particles across the die, default 10 16 25; dx = W/N, h = 1.6 dx,
+five dummy layers and a five-column buffer) and each Reynolds number --re (default 0.5 and
+0.01; Re = rho W U / mu: the viscosity is mu = rho W U / Re, U and rho stay the case's).
+The sound speed keeps the case's compressibility: the die's pressure drop 12 mu U L / W^2
+grows as 1/Re, so c = 40 m/s * sqrt(0.5 / Re) keeps it at 1.9 % of rho c^2 (thesis eq. 3.38);
+at Re = 0.01 that is c = 283 m/s and mu = 500 Pa s, whose step (acoustic and viscous limits
+alike, about 7e-7 s at 10 across) is some 7 times shorter than Re = 0.5's: the creeping runs
+are the costly ones.
+
+Each run is measured by tools/die_swell_measure.py (stations --stations, default 0.21 0.23
+0.25 m; the steady window: the later half of the frames where all stations are defined):
+  envelope  (max y - min y + dx)/W of the slab one dx wide, mean over stations and window;
+  filled    the particles' volume per length over W (4 dx slab);
+  flux      U / u_bar: the feed's mean velocity over the extrudate's volume-weighted mean
+            velocity u_bar in the same 4 dx slabs (a jet carrying the feed's volume flux U W
+            at u_bar is U/u_bar wide; the earlier sessions' "from the flux" number).
+Per Re, the three finest resolutions give the observed order p and the Richardson-
+extrapolated value of each measure (generalised to unequal refinement ratios: p solves
+(h3^p - h2^p)/(h2^p - h1^p) = (phi3 - phi2)/(phi2 - phi1), h = W/N, h1 the finest;
+phi_ext = phi1 + (phi1 - phi2)/((h2/h1)^p - 1); GCI_fine = 1.25 |phi2 - phi1| / |phi1| /
+((h2/h1)^p - 1), Roache 1998, Celik et al. 2008). A sequence that is not monotone, or whose
+differences do not shrink (p <= 0), has no extrapolated value, and the output says so; an
+order outside [0.5, 4] is flagged as probably not yet in the asymptotic range.
+
+Variants (one thing at a time against the case; each adds a suffix to the study's folder):
+--wall-floor P (pressure_floor on both die walls, Pa; _floorP), --xsph EPS (0 deletes
+[effects.xsph]; _xsphEPS), --delta D (0 deletes [effects.density_diffusion]; _deltaD),
+--shifting A (particle shifting, coefficient A, speed U, with [effects.free_surface] at 0.8;
+_shiftingA), --sound-speed C (m/s, instead of the rule above; _cC), --integrator TYPE
+(_TYPE).
+
+Outputs: OUT/convergence[SUFFIX]/re<Re>_n<N>/ (the scene, the vesph output and log, the
+measure's files), OUT/convergence[SUFFIX]/convergence[SUFFIX].csv (one row per run),
+..._richardson.csv (one row per Re and measure), ..._richardson.txt (the verdicts) and
+..._swell.png (swell against dx/W, the extrapolated values at 0, the finite-element band
+1.186-1.20 of creeping planar flow).
+
+--compare runs nothing: it reads every OUT/convergence*/convergence*.csv (the case and each
+variant measured so far; the folders' CSVs hold the runs of their last invocation, so run
+--measure-only over all the resolutions of a folder first), prints one table (swell per variant
+and resolution) and plots envelope and flux against dx/W per variant at the first --re in
+OUT/convergence_variants.png.
+
+Exit status: 0 when every run was made or tabulated; 1 when a run could not be measured at
+all; 2 for bad arguments.
+"""
+import argparse
+import concurrent.futures
+import copy
+import csv
+import json
+import math
+import os
+import shutil
+import subprocess
+import sys
+import time
+import tomllib
+
+from vesph import REPO as ROOT, tool_command, tool_environment
+
+CASE = os.path.join(ROOT, "cases", "die_swell_newtonian.toml")
+RHO, W, U = 1000.0, 0.01, 0.5            # the case's density, die width, feed mean velocity
+DIE_INLET, DIE_EXIT = 0.15, 0.2
+RE_CASE, C_CASE = 0.5, 40.0              # the case's Reynolds number and sound speed
+FE_BAND = (1.186, 1.20)                  # finite elements, creeping planar Newtonian flow
+ORDER_RANGE = (0.5, 4.0)                 # observed orders outside: not asymptotic (flagged)
+
+
+def g6(x):
+    return float(f"{x:.6g}")
+
+
+def viscosity(re):
+    return RHO * W * U / re
+
+
+def sound_speed(re):
+    """The case's c = 40 m/s at Re = 0.5, scaled so that the die's pressure drop (prop. to
+    1/Re) stays the same share of rho c^2."""
+    return C_CASE * math.sqrt(RE_CASE / re)
+
+
+def label(re, n):
+    return f"re{re:g}_n{n}"
+
+
+def variant_suffix(v):
+    s = ""
+    if v.get("wall_floor") is not None:
+        s += f"_floor{v['wall_floor']:g}"
+    if v.get("xsph") is not None:
+        s += f"_xsph{v['xsph']:g}"
+    if v.get("delta") is not None:
+        s += f"_delta{v['delta']:g}"
+    if v.get("shifting"):
+        s += f"_shifting{v['shifting']:g}"
+    if v.get("sound_speed") is not None:
+        s += f"_c{v['sound_speed']:g}"
+    if v.get("integrator"):
+        s += f"_{v['integrator']}"
+    return s
+
+
+def scene(n, re, variant=None, end=None, interval=None):
+    """The scene dict of the Newtonian die at n particles across and Reynolds number re, with
+    the variant's one change (see the module docstring)."""
+    v = variant or {}
+    with open(CASE, "rb") as fh:
+        s = copy.deepcopy(tomllib.load(fh))
+    # The geometry at full precision (not rounded): every block must be a whole number of
+    # spacings, and W/13 has no short decimal form.
+    dx = W / n
+    depth = 5 * dx                       # dummy layers / buffer columns >= support 4.8 dx
+    s["name"] = label(re, n)
+    s["particles"]["spacing"] = dx
+    s["domain"]["min"] = [DIE_INLET - depth, s["domain"]["min"][1]]
+    fluid, lower, upper = s["blocks"]
+    fluid["min"], fluid["max"] = [DIE_INLET, 0.0], [DIE_EXIT, W]
+    lower["min"], lower["max"] = [DIE_INLET - depth, -depth], [DIE_EXIT, 0.0]
+    upper["min"], upper["max"] = [DIE_INLET - depth, W], [DIE_EXIT, W + depth]
+    s["inflow"]["min"], s["inflow"]["max"] = [DIE_INLET - depth, 0.0], [DIE_INLET, W]
+    s["fluid"]["viscosity"] = g6(viscosity(re))
+    e = s["effects"]
+    e["equation_of_state"]["sound_speed"] = g6(v["sound_speed"] if v.get("sound_speed") is not None
+                                               else sound_speed(re))
+    if v.get("wall_floor") is not None:
+        lower["pressure_floor"] = upper["pressure_floor"] = float(v["wall_floor"])
+    if v.get("xsph") is not None:
+        if v["xsph"] > 0:
+            e["xsph"]["epsilon"] = g6(v["xsph"])
+        else:
+            del e["xsph"]
+    if v.get("delta") is not None:
+        if v["delta"] > 0:
+            e["density_diffusion"]["delta"] = g6(v["delta"])
+        else:
+            del e["density_diffusion"]
+    if v.get("shifting"):
+        e.setdefault("free_surface", {"threshold": 0.8})
+        e["particle_shifting"] = {"coefficient": g6(v["shifting"]), "speed": U}
+    if v.get("integrator"):
+        s["integrator"] = {"type": v["integrator"]}
+    if end is not None:
+        s["time"]["end"] = g6(end)
+    if interval is not None:
+        s["output"]["interval"] = g6(interval)
+    return s
+
+
+# ------------------------------------------------------------------- Richardson extrapolation
+def observed_order(across, values, order_range=ORDER_RANGE):
+    """Observed order and Richardson extrapolation from the three finest of (across, value)
+    pairs (h = 1/across). Returns a dict: n (the three N used, finest first), values (theirs),
+    p, extrapolated, gci (relative, fine grid), status ("monotone", "oscillatory", "diverging",
+    "unchanged", "too_few", "undefined") and message (a sentence saying what can be read)."""
+    pts = sorted(((int(n), float(v)) for n, v in zip(across, values)), key=lambda t: -t[0])
+    nan = math.nan
+    res = {"n": [t[0] for t in pts[:3]], "values": [t[1] for t in pts[:3]], "p": nan,
+           "extrapolated": nan, "gci": nan, "asymptotic": False}
+    if len(pts) < 3 or len({t[0] for t in pts[:3]}) < 3:
+        res.update(status="too_few", message="fewer than three resolutions: no observed order")
+        return res
+    (n1, f1), (n2, f2), (n3, f3) = pts[:3]
+    if not all(math.isfinite(f) for f in (f1, f2, f3)):
+        res.update(status="undefined", message="a resolution has no value: no observed order")
+        return res
+    e21, e32 = f2 - f1, f3 - f2
+    r21, r32 = n1 / n2, n2 / n3           # h2/h1, h3/h2 (> 1)
+    if e21 == 0.0 and e32 == 0.0:
+        res.update(status="unchanged", extrapolated=f1, gci=0.0, asymptotic=True,
+                   message="the three finest values are equal")
+        return res
+    if e21 == 0.0 or e32 == 0.0 or e32 / e21 < 0.0:
+        res.update(status="oscillatory",
+                   message=f"not monotone: N = {n3}, {n2}, {n1} give {f3:.4g}, {f2:.4g}, {f1:.4g} "
+                           "(the change reverses, or stops and restarts, under refinement); not in the "
+                           "asymptotic range, no Richardson value")
+        return res
+    ratio = e32 / e21
+    # R(p) = (h3^p - h2^p)/(h2^p - h1^p) in units of h1: (r21 r32)^p - r21^p over r21^p - 1;
+    # increasing in p from 0 (p -> -inf) through ln(r32)/ln(r21) (p -> 0) to infinity.
+    def R(p):
+        if abs(p) < 1e-12:
+            return math.log(r32) / math.log(r21)
+        return ((r21 * r32) ** p - r21 ** p) / (r21 ** p - 1.0)
+
+    lo, hi = -40.0, 40.0
+    if not (R(lo) < ratio < R(hi)):
+        res.update(status="diverging" if ratio <= R(lo) else "monotone",
+                   message="the observed order is outside [-40, 40]")
+        return res
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        if R(mid) < ratio:
+            lo = mid
+        else:
+            hi = mid
+    p = 0.5 * (lo + hi)
+    res["p"] = p
+    if p <= 0.0:
+        res.update(status="diverging",
+                   message=f"monotone but not converging: the change grows under refinement "
+                           f"({f3:.4g} -> {f2:.4g} -> {f1:.4g} for N = {n3}, {n2}, {n1}; observed "
+                           f"order {p:.3g} <= 0); no Richardson value")
+        return res
+    den = r21 ** p - 1.0
+    res["extrapolated"] = f1 + (f1 - f2) / den
+    res["gci"] = 1.25 * abs(e21) / abs(f1) / den if f1 != 0.0 else nan
+    res["asymptotic"] = order_range[0] <= p <= order_range[1]
+    msg = (f"monotone: N = {n3}, {n2}, {n1} give {f3:.4g}, {f2:.4g}, {f1:.4g}; observed order "
+           f"{p:.3g}, Richardson value {res['extrapolated']:.4g} (GCI {100 * res['gci']:.2g} %)")
+    if not res["asymptotic"]:
+        msg += (f"; the order lies outside [{order_range[0]:g}, {order_range[1]:g}]: probably not "
+                "yet in the asymptotic range, the extrapolated value is not reliable")
+    res.update(status="monotone", message=msg)
+    return res
+
+
+# ------------------------------------------------------------------- measuring
+def flux_ratio(h5, stations, t0, t1, u_feed=U, die_width=W, window=4.0):
+    """(mean, std) over the frames with t0 <= time <= t1 of U / u_bar averaged over the
+    stations, u_bar the volume-weighted mean x velocity of the fluid particles in the slab
+    x_s - window dx/2 <= x < x_s + window dx/2; nan when a station is empty in every frame."""
+    import numpy as np
+    from vesph.measure.die_swell import Run
+
+    r = Run(h5)
+    try:
+        half = 0.5 * window * r.dx
+        vals = []
+        for k, (_, t) in enumerate(r.frames):
+            if t < t0 - 1e-12 or t > t1 + 1e-12:
+                continue
+            fr = r.read_frame(k, full=True)
+            if fr is None:
+                continue
+            fl = fr["kind"] == 0
+            x, u = fr["position"][fl, 0], fr["velocity"][fl, 0]
+            vol = fr["volume"][fl] if "volume" in fr else np.ones(int(fl.sum()))
+            per = []
+            for xs in stations:
+                m = (x >= xs - half * (1 + 1e-9)) & (x < xs + half * (1 - 1e-9))
+                if np.count_nonzero(m) < 2:
+                    per.append(math.nan)
+                    continue
+                ub = float(np.sum(vol[m] * u[m]) / np.sum(vol[m]))
+                per.append(u_feed / ub if ub > 0 else math.nan)
+            if all(math.isfinite(q) for q in per):
+                vals.append(float(np.mean(per)))
+        if not vals:
+            return math.nan, math.nan
+        return float(np.mean(vals)), float(np.std(vals))
+    finally:
+        r.close()
+
+
+def measure_run(d, lab, re, n, stations, rc=None, wall=math.nan, png=True):
+    """The study's row of one run (None when it left neither output nor summary)."""
+    from vesph.studies.die_swell import extrudate_clusters, EXIT_OF_STATUS
+
+    h5 = os.path.join(d, lab + ".h5")
+    summ = os.path.join(d, "summary.json")
+    js = None
+    if os.path.exists(summ):
+        with open(summ) as fh:
+            js = json.load(fh)
+    if rc is None:
+        if js is None and not os.path.exists(h5):
+            return None
+        rc = EXIT_OF_STATUS.get((js or {}).get("status"), 1)
+        wall = (js or {}).get("wall_seconds") or math.nan
+    row = {"label": lab, "Re": re, "across": n, "dx_m": W / n, "mu_Pa_s": viscosity(re),
+           "exit_status": rc, "status": (js or {}).get("status", ""),
+           "end_time_s": (js or {}).get("final_time", math.nan),
+           "steps": (js or {}).get("steps", math.nan), "wall_s": wall}
+    if js and js.get("status") != "ok" and "message" in js:
+        row["message"] = js["message"]
+    if not os.path.exists(h5):
+        return row
+    m = subprocess.run(tool_command("vesph.measure.die_swell") + [
+        h5, "--out-dir", d, "--prefix", lab, "--stations", *[f"{x:g}" for x in stations]]
+        + ([] if png else ["--no-png"]), capture_output=True, text=True, env=tool_environment())
+    sj = os.path.join(d, lab + "_summary.json")
+    if m.returncode == 0 and os.path.exists(sj):
+        with open(sj) as fh:
+            ms = json.load(fh)
+        num = lambda v: math.nan if v is None else float(v)  # noqa: E731
+        row["envelope"], row["envelope_std"] = num(ms["average"]["mean"]), num(ms["average"]["std"])
+        row["filled"], row["filled_std"] = num(ms["filled"]["mean"]), num(ms["filled"]["std"])
+        for s in ms["stations"]:
+            row[f"envelope_x{s['x_m']:g}"] = num(s["mean"])
+        row["frames_used"] = ms["frames_used"]
+        t0, t1 = (num(t) for t in ms["time_window_s"])
+        row["window_from_s"], row["window_to_s"] = t0, t1
+        if math.isfinite(t0):
+            row["flux"], row["flux_std"] = flux_ratio(h5, stations, t0, t1)
+    else:
+        row["message"] = ((m.stderr or m.stdout).strip().splitlines() or [""])[-1]
+    try:
+        row["clusters"], row["detached"], _ = extrudate_clusters(h5)
+    except Exception as ex:   # an unreadable output is reported, not fatal
+        row["message"] = str(ex)
+    return row
+
+
+COLUMNS = ["label", "Re", "across", "dx_m", "mu_Pa_s", "exit_status", "status", "end_time_s",
+           "steps", "wall_s", "envelope", "envelope_std", "filled", "filled_std", "flux",
+           "flux_std", "frames_used", "window_from_s", "window_to_s", "clusters", "detached",
+           "message"]
+MEASURES = ("envelope", "filled", "flux")
+
+
+def fmt(v):
+    if v is None:
+        return ""
+    if isinstance(v, float):
+        return "nan" if not math.isfinite(v) else f"{v:.6g}"
+    return str(v)
+
+
+def richardson_rows(rows, res_list):
+    out = []
+    for re in res_list:
+        sel = [r for r in rows if r["Re"] == re]
+        for q in MEASURES:
+            o = observed_order([r["across"] for r in sel], [r.get(q, math.nan) for r in sel])
+            out.append({"Re": re, "measure": q, **o})
+    return out
+
+
+def plot(rows, rich, png, title):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    ax.axhspan(*FE_BAND, color="0.85", label="finite elements, creeping flow (1.186-1.20)")
+    marks = {"envelope": "o-", "filled": "s:", "flux": "^--"}
+    for re in sorted({r["Re"] for r in rows}, reverse=True):
+        sel = sorted((r for r in rows if r["Re"] == re), key=lambda r: r["across"])
+        color = None
+        for q in MEASURES:
+            x = [1.0 / r["across"] for r in sel]
+            y = [r.get(q, math.nan) for r in sel]
+            err = [r.get(q + "_std", math.nan) for r in sel]
+            cont = ax.errorbar(x, y, yerr=[e if math.isfinite(e) else 0.0 for e in err], fmt=marks[q],
+                               color=color, capsize=3, label=f"Re = {re:g}: {q} (± std over the window)")
+            color = cont.lines[0].get_color()
+            o = next((o for o in rich if o["Re"] == re and o["measure"] == q), None)
+            if o and math.isfinite(o["extrapolated"]):
+                ax.plot([0.0], [o["extrapolated"]], marks[q][0], color=color, mfc="none", ms=9)
+    ax.axhline(1.0, color="k", lw=0.6)
+    ax.set_xlim(left=0.0)
+    ax.set_xlabel("dx / W = 1 / (particles across)  (open markers at 0: Richardson values)")
+    ax.set_ylabel("steady swell ratio")
+    ax.set_title(title)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(png, dpi=120)
+    plt.close(fig)
+
+
+def compare(out, re, png=True):
+    """The table and figure of --compare (see the module docstring)."""
+    import glob
+
+    series = {}
+    for path in sorted(glob.glob(os.path.join(out, "convergence*", "convergence*.csv"))):
+        name = os.path.basename(os.path.dirname(path))
+        if os.path.basename(path) != name + ".csv":
+            continue                      # the _richardson.csv beside it
+        with open(path, newline="") as fh:
+            rows = [r for r in csv.DictReader(fh) if float(r["Re"]) == re]
+        if rows:
+            series[name] = sorted(rows, key=lambda r: int(r["across"]))
+    if not series:
+        print(f"no convergence*.csv with Re = {re:g} under {out}")
+        return 1
+    num = lambda r, k: float(r[k]) if r.get(k) not in (None, "") else math.nan  # noqa: E731
+    print(f"== die swell variants at Re = {re:g} (steady mean +- std over the window)")
+    print(f"   {'variant':<34}{'N':>4}{'envelope':>16}{'filled':>9}{'flux':>16}{'wall s':>8}")
+    for name, rows in series.items():
+        for r in rows:
+            print(f"   {name:<34}{int(r['across']):>4}"
+                  f"{num(r, 'envelope'):>9.3f} +-{num(r, 'envelope_std'):.3f}{num(r, 'filled'):>9.3f}"
+                  f"{num(r, 'flux'):>9.3f} +-{num(r, 'flux_std'):.3f}{num(r, 'wall_s'):>8.0f}")
+    if not png:
+        return 0
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.5), sharey=True)
+    for ax, q in zip(axes, ("envelope", "flux")):
+        ax.axhspan(*FE_BAND, color="0.85", label="finite elements, creeping flow")
+        for name, rows in series.items():
+            x = [1.0 / int(r["across"]) for r in rows]
+            ax.errorbar(x, [num(r, q) for r in rows], yerr=[num(r, q + "_std") for r in rows],
+                        marker="o", capsize=3, label=name.replace("convergence", "case") or "case")
+        ax.set_xlim(left=0.0)
+        ax.set_xlabel("dx / W")
+        ax.set_title(f"{q} swell, Re = {re:g}")
+        ax.grid(alpha=0.3)
+    axes[0].set_ylabel("steady swell ratio")
+    axes[1].legend(fontsize=7)
+    fig.tight_layout()
+    fn = os.path.join(out, "convergence_variants.png")
+    fig.savefig(fn, dpi=120)
+    plt.close(fig)
+    print(f"wrote {fn}")
+    return 0
+
+
+def run_one(scene_path, d, vesph):
+    t0 = time.time()
+    with open(os.path.join(d, "run.log"), "w") as log:
+        rc = subprocess.call([vesph, "run", scene_path, "-o", d, "--quiet"], stdout=log,
+                             stderr=subprocess.STDOUT)
+    return rc, time.time() - t0
+
+
+def main(argv=None):
+    from vesph.studies.die_swell import toml_dumps
+
+    ap = argparse.ArgumentParser(prog="die_swell_study.py convergence",
+                                 description="the Newtonian die swell under refinement")
+    ap.add_argument("--across", type=int, nargs="+", default=[10, 16, 25], metavar="N")
+    ap.add_argument("--re", type=float, nargs="+", default=[0.5, 0.01], metavar="RE")
+    ap.add_argument("--end", type=float, default=None, metavar="T",
+                    help="end time, s (default the case's 0.35 s)")
+    ap.add_argument("--interval", type=float, default=0.005, metavar="T",
+                    help="output interval, s (default 0.005)")
+    ap.add_argument("--stations", type=float, nargs="+", default=[0.21, 0.23, 0.25], metavar="X")
+    ap.add_argument("--wall-floor", type=float, default=None, metavar="P")
+    ap.add_argument("--xsph", type=float, default=None, metavar="EPS")
+    ap.add_argument("--delta", type=float, default=None, metavar="D")
+    ap.add_argument("--shifting", type=float, default=0.0, metavar="A")
+    ap.add_argument("--sound-speed", type=float, default=None, metavar="C")
+    ap.add_argument("--integrator", default=None, metavar="TYPE")
+    ap.add_argument("--jobs", type=int, default=1, metavar="J")
+    ap.add_argument("--out", default="out/die_swell_study", metavar="DIR")
+    ap.add_argument("--vesph", default=os.path.join(ROOT, "build", "vesph"), metavar="PATH")
+    ap.add_argument("--dry-run", action="store_true")
+    ap.add_argument("--measure-only", action="store_true")
+    ap.add_argument("--no-png", action="store_true")
+    ap.add_argument("--compare", action="store_true",
+                    help="run nothing: tabulate and plot every OUT/convergence* study at the first --re")
+    a = ap.parse_args(argv)
+    if a.compare:
+        return compare(a.out, a.re[0], png=not a.no_png)
+    if min(a.across) < 5 or len(set(a.across)) != len(a.across):
+        ap.error("--across: distinct resolutions of at least 5 particles across the die")
+    if min(a.re) <= 0:
+        ap.error("--re must be > 0")
+    if any(not (DIE_EXIT < x < 0.3) for x in a.stations):
+        ap.error("--stations must lie between the die exit (0.2 m) and the outflow (0.3 m)")
+    if a.xsph is not None and not (0.0 <= a.xsph <= 1.0):
+        ap.error("--xsph must lie in [0, 1]")
+    if a.delta is not None and a.delta < 0 or a.shifting < 0:
+        ap.error("--delta and --shifting must be >= 0")
+    if a.sound_speed is not None and a.sound_speed <= 0:
+        ap.error("--sound-speed must be > 0")
+    if a.wall_floor is not None and not math.isfinite(a.wall_floor):
+        ap.error("--wall-floor must be a finite pressure (Pa)")
+    if not (a.dry_run or a.measure_only) and not shutil.which(a.vesph) and not os.path.exists(a.vesph):
+        ap.error(f"--vesph {a.vesph}: no such executable (build first: see README)")
+    variant = {"wall_floor": a.wall_floor, "xsph": a.xsph, "delta": a.delta,
+               "shifting": a.shifting, "sound_speed": a.sound_speed, "integrator": a.integrator}
+    name = "convergence" + variant_suffix(variant)
+    sd = os.path.join(a.out, name)
+    todo = []
+    for re in a.re:
+        for n in sorted(a.across):
+            lab = label(re, n)
+            d = os.path.join(sd, lab)
+            os.makedirs(d, exist_ok=True)
+            sp = os.path.join(d, lab + ".toml")
+            if not a.measure_only:
+                with open(sp, "w") as fh:
+                    fh.write(f"# die_swell_study.py {name}: Re = {re:g}, {n} across\n")
+                    fh.write(toml_dumps(scene(n, re, variant, a.end, a.interval)) + "\n")
+            todo.append((re, n, lab, d, sp))
+    if a.dry_run:
+        for *_, d, sp in todo:
+            print(f"{a.vesph} run {sp} -o {d} --quiet")
+        return 0
+    results = {}
+    if not a.measure_only:
+        print(f"== {name}: {len(todo)} runs, {a.jobs} at once", flush=True)
+        with concurrent.futures.ThreadPoolExecutor(a.jobs) as pool:
+            futs = {pool.submit(run_one, sp, d, a.vesph): lab for _, _, lab, d, sp in todo}
+            for f in concurrent.futures.as_completed(futs):
+                results[futs[f]] = f.result()
+                print(f"   {futs[f]}: exit {results[futs[f]][0]}, {results[futs[f]][1]:.0f} s",
+                      flush=True)
+    status, rows = 0, []
+    for re, n, lab, d, _ in todo:
+        rc, wall = results.get(lab, (None, math.nan))
+        row = measure_run(d, lab, re, n, a.stations, rc, wall, png=not a.no_png)
+        if row is None:
+            print(f"   {lab}: no output in {d}")
+            status = 1
+            continue
+        rows.append(row)
+    rich = richardson_rows(rows, a.re)
+    csv_path = os.path.join(sd, name + ".csv")
+    with open(csv_path, "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(COLUMNS)
+        for row in rows:
+            w.writerow([fmt(row.get(c)) for c in COLUMNS])
+    rcsv = os.path.join(sd, name + "_richardson.csv")
+    with open(rcsv, "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(["Re", "measure", "n_fine_to_coarse", "values", "observed_order", "extrapolated",
+                    "gci_fine", "asymptotic", "status", "message"])
+        for o in rich:
+            w.writerow([fmt(o["Re"]), o["measure"], " ".join(map(str, o["n"])),
+                        " ".join(fmt(v) for v in o["values"]), fmt(o["p"]), fmt(o["extrapolated"]),
+                        fmt(o["gci"]), o["asymptotic"], o["status"], o["message"]])
+    print(f"== {name}")
+    print(f"   {'label':<14}{'exit':>5}{'wall s':>8}{'envelope':>10}{'std':>7}{'filled':>8}"
+          f"{'flux':>8}{'clust':>6}{'det':>5}")
+    for r in rows:
+        print(f"   {r['label']:<14}{r['exit_status']:5d}{fmt(r.get('wall_s')):>8}"
+              f"{fmt(r.get('envelope')):>10.8}{fmt(r.get('envelope_std')):>7.5}"
+              f"{fmt(r.get('filled')):>8.6}{fmt(r.get('flux')):>8.6}"
+              f"{fmt(r.get('clusters')):>6}{fmt(r.get('detached')):>5}"
+              + (f"   ({r['message']})" if r.get("message") else ""))
+    txt = os.path.join(sd, name + "_richardson.txt")
+    with open(txt, "w") as fh:
+        for o in rich:
+            line = f"Re = {o['Re']:g}, {o['measure']}: {o['message']}"
+            print("   " + line)
+            fh.write(line + "\n")
+    print(f"wrote {csv_path}, {rcsv}, {txt}")
+    if rows and not a.no_png:
+        png = os.path.join(sd, name + "_swell.png")
+        plot(rows, rich, png, f"die swell, Newtonian: {name}")
+        print(f"wrote {png}")
+    return status
+
+
+if __name__ == "__main__":
+    sys.exit(main())
