@@ -362,21 +362,29 @@ def extrudate_clusters(h5, frame=None):
 EXIT_OF_STATUS = {"ok": 0, "diverged": 3, "interrupted": 130}
 
 
-def measure(run, d, rc, wall, png):
-    """The study's row for one run. rc None (--measure-only): the exit status and wall time
-    from the run's summary.json; then None when the run left no summary."""
-    h5 = os.path.join(d, run.label + ".h5")
+def run_summary(d, rc, wall):
+    """(summary.json of the run in d as a dict or None, exit status, wall time s). rc None
+    (--measure-only): the exit status and wall time from the summary (1 and nan without one)."""
     summ = os.path.join(d, "summary.json")
     js = None
     if os.path.exists(summ):
         with open(summ) as fh:
             js = json.load(fh)
     if rc is None:
-        if js is None:
-            return None
-        rc = EXIT_OF_STATUS.get(js.get("status"), 1)
-        wall = js.get("wall_seconds")
+        rc = EXIT_OF_STATUS.get((js or {}).get("status"), 1)
+        wall = (js or {}).get("wall_seconds")
         wall = math.nan if wall is None else wall
+    return js, rc, wall
+
+
+def measure(run, d, rc, wall, png):
+    """The study's row for one run. rc None (--measure-only): the exit status and wall time
+    from the run's summary.json; then None when the run left no summary."""
+    h5 = os.path.join(d, run.label + ".h5")
+    measure_only = rc is None
+    js, rc, wall = run_summary(d, rc, wall)
+    if measure_only and js is None:
+        return None
     row = {"label": run.label, "v_m_s": run.v, "Re": run.Re, "De": round(run.De, 6),
            "alpha1_Pa_s2": run.alpha1, "alpha2_Pa_s2": -0.1 * run.alpha1, "form": run.form,
            "derivative": run.derivative, "procedure": run.procedure, "scheme": run.scheme,

@@ -270,19 +270,13 @@ def flux_ratio(h5, stations, t0, t1, u_feed=U, die_width=W, window=4.0):
 
 def measure_run(d, lab, re, n, stations, rc=None, wall=math.nan, png=True):
     """The study's row of one run (None when it left neither output nor summary)."""
-    from vesph.studies.die_swell import extrudate_clusters, EXIT_OF_STATUS
+    from vesph.studies.die_swell import extrudate_clusters, run_summary
 
     h5 = os.path.join(d, lab + ".h5")
-    summ = os.path.join(d, "summary.json")
-    js = None
-    if os.path.exists(summ):
-        with open(summ) as fh:
-            js = json.load(fh)
-    if rc is None:
-        if js is None and not os.path.exists(h5):
-            return None
-        rc = EXIT_OF_STATUS.get((js or {}).get("status"), 1)
-        wall = (js or {}).get("wall_seconds") or math.nan
+    measure_only = rc is None
+    js, rc, wall = run_summary(d, rc, wall)
+    if measure_only and js is None and not os.path.exists(h5):
+        return None
     row = {"label": lab, "Re": re, "across": n, "dx_m": W / n, "mu_Pa_s": viscosity(re),
            "exit_status": rc, "status": (js or {}).get("status", ""),
            "end_time_s": (js or {}).get("final_time", math.nan),
