@@ -450,6 +450,15 @@ def fmt(v):
     return str(v)
 
 
+def write_rows(path, columns, rows):
+    """A study's CSV: the header, then each row's cells in the columns' order (fmt)."""
+    with open(path, "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(columns)
+        for row in rows:
+            w.writerow([fmt(row.get(c)) for c in columns])
+
+
 def short(v):
     return f"{v:.4g}" if isinstance(v, float) else fmt(v)
 
@@ -612,11 +621,7 @@ def main(argv=None):
                 continue
             rows.append(row)
         csv_path = os.path.join(sd, name + ".csv")
-        with open(csv_path, "w", newline="") as fh:
-            w = csv.writer(fh)
-            w.writerow(COLUMNS)
-            for row in rows:
-                w.writerow([fmt(row.get(c)) for c in COLUMNS])
+        write_rows(csv_path, COLUMNS, rows)
         print(f"== {name} ({a.across} across)")
         print(f"   {'label':<28}{'De':>7}{'Re':>6}{'exit':>6}{'swell':>9}{'std':>8}"
               f"{'filled':>9}{'clust':>6}{'det':>5}{'face':>5}{'out':>7}  stable")

@@ -71,6 +71,7 @@ import time
 import tomllib
 
 from vesph import REPO as ROOT, tool_command, tool_environment
+from vesph.studies.die_swell import fmt, write_rows  # the CSV as the thesis studies write it
 
 CASE = os.path.join(ROOT, "cases", "die_swell_newtonian.toml")
 RHO, W, U = 1000.0, 0.01, 0.5            # the case's density, die width, feed mean velocity
@@ -318,14 +319,6 @@ COLUMNS = ["label", "Re", "across", "dx_m", "mu_Pa_s", "exit_status", "status", 
 MEASURES = ("envelope", "filled", "flux")
 
 
-def fmt(v):
-    if v is None:
-        return ""
-    if isinstance(v, float):
-        return "nan" if not math.isfinite(v) else f"{v:.6g}"
-    return str(v)
-
-
 def richardson_rows(rows, res_list):
     out = []
     for re in res_list:
@@ -513,11 +506,7 @@ def main(argv=None):
         rows.append(row)
     rich = richardson_rows(rows, a.re)
     csv_path = os.path.join(sd, name + ".csv")
-    with open(csv_path, "w", newline="") as fh:
-        w = csv.writer(fh)
-        w.writerow(COLUMNS)
-        for row in rows:
-            w.writerow([fmt(row.get(c)) for c in COLUMNS])
+    write_rows(csv_path, COLUMNS, rows)
     rcsv = os.path.join(sd, name + "_richardson.csv")
     with open(rcsv, "w", newline="") as fh:
         w = csv.writer(fh)
