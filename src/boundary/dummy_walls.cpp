@@ -8,6 +8,7 @@
 #include <Eigen/Geometry>  // cross products
 
 #include "vesph/core/types.hpp"
+#include "vesph/physics/constitutive.hpp"  // packed symmetric tensors
 
 namespace vesph {
 
@@ -89,18 +90,9 @@ void rotatedValue(const Field& f, const double* src, const Rotation<D>& R, doubl
       for (int a = 0; a < D; ++a) out[a] = v[a];
       return;
     }
-    case Field::Transform::symmetric_tensor: {
-      Rotation<D> S;
-      if constexpr (D == 2) S << src[0], src[1], src[1], src[2];
-      else S << src[0], src[1], src[2], src[1], src[3], src[4], src[2], src[4], src[5];
-      const Rotation<D> T = R * S * R.transpose();
-      if constexpr (D == 2) {
-        out[0] = T(0, 0); out[1] = T(0, 1); out[2] = T(1, 1);
-      } else {
-        out[0] = T(0, 0); out[1] = T(0, 1); out[2] = T(0, 2); out[3] = T(1, 1); out[4] = T(1, 2); out[5] = T(2, 2);
-      }
+    case Field::Transform::symmetric_tensor:
+      packSymmetric<D>(R * unpackSymmetric<D>(src) * R.transpose(), out);
       return;
-    }
     case Field::Transform::tensor: {
       const Rotation<D> T = R * Eigen::Map<const Eigen::Matrix<double, D, D, Eigen::RowMajor>>(src) * R.transpose();
       Eigen::Map<Eigen::Matrix<double, D, D, Eigen::RowMajor>> target(out);
@@ -294,28 +286,34 @@ double DummyWalls<D>::interpolateFields(ParticleSet<D>& p, Index w, std::span<co
       }
     }
   }
+  for (Field* f : interpolated_)
+    for (int c = 0; c < f->components; ++c) f->data[static_cast<std::size_t>(f->components) * w + c] = 0.0;
+  if (!(vol_w > 0)) return vol_w;
+  // Neighbours outer, fields inner: one weight and one rotation per neighbour (each field's sum
+  // runs over the neighbours in the same order as eq. 46 alone).
   const Vec<D> xw = p.x(w);
-  for (Field* fp : interpolated_) {
-    Field& f = *fp;
-    const int nc = f.components;
-    double* out = f.data.data() + static_cast<std::size_t>(nc) * w;
-    for (int c = 0; c < nc; ++c) out[c] = 0.0;
-    if (!(vol_w > 0)) continue;
-    for (const Neighbour<D>& nb : fluid) {
-      const double vw = p.mass[nb.j] / p.density[nb.j] * nb.W;
-      const double weight = continued ? vw * (1.0 / vol_w - (-nb.rij - mean_offset).dot(a)) : vw;
+  for (const Neighbour<D>& nb : fluid) {
+    const double vw = p.mass[nb.j] / p.density[nb.j] * nb.W;
+    const double weight = continued ? vw * (1.0 / vol_w - (-nb.rij - mean_offset).dot(a)) : vw;
+    const Rotation<D> R = polar ? azimuthalRotation(*polar, xw, Vec<D>(xw - nb.rij), 1e-6 * dx_)
+                                : Rotation<D>::Identity();
+    for (Field* fp : interpolated_) {
+      Field& f = *fp;
+      const int nc = f.components;
+      double* out = f.data.data() + static_cast<std::size_t>(nc) * w;
       const double* src = f.data.data() + static_cast<std::size_t>(nc) * nb.j;
       if (polar && f.transform != Field::Transform::invariant) {
         double turned[9];  // at most D x D components (checked at the first update)
-        rotatedValue<D>(f, src, azimuthalRotation(*polar, xw, Vec<D>(xw - nb.rij), 1e-6 * dx_), turned);
+        rotatedValue<D>(f, src, R, turned);
         for (int c = 0; c < nc; ++c) out[c] += weight * turned[c];
         continue;
       }
       for (int c = 0; c < nc; ++c) out[c] += weight * src[c];
     }
-    if (!continued)
-      for (int c = 0; c < nc; ++c) out[c] /= vol_w;
   }
+  if (!continued)
+    for (Field* f : interpolated_)
+      for (int c = 0; c < f->components; ++c) f->data[static_cast<std::size_t>(f->components) * w + c] /= vol_w;
   return vol_w;
 }
 
