@@ -325,13 +325,19 @@ def toml_dumps(table, prefix=""):
 
 
 # ------------------------------------------------------------------------------ running
-def run_one(run, d, vesph):
-    """Run vesph on d/LABEL.toml; returns (exit status, wall time s). The log is d/run.log."""
+def run_scene(scene_path, d, vesph):
+    """Run vesph on scene_path with output in d; returns (exit status, wall time s). The log is
+    d/run.log."""
     t0 = time.time()
     with open(os.path.join(d, "run.log"), "w") as log:
-        rc = subprocess.call([vesph, "run", os.path.join(d, run.label + ".toml"), "-o", d,
-                              "--quiet"], stdout=log, stderr=subprocess.STDOUT)
+        rc = subprocess.call([vesph, "run", scene_path, "-o", d, "--quiet"], stdout=log,
+                             stderr=subprocess.STDOUT)
     return rc, time.time() - t0
+
+
+def run_one(run, d, vesph):
+    """Run vesph on d/LABEL.toml (run_scene)."""
+    return run_scene(os.path.join(d, run.label + ".toml"), d, vesph)
 
 
 def extrudate_clusters(h5, frame=None):

@@ -67,11 +67,10 @@ import os
 import shutil
 import subprocess
 import sys
-import time
 import tomllib
 
 from vesph import REPO as ROOT, tool_command, tool_environment
-from vesph.studies.die_swell import fmt, write_rows  # the CSV as the thesis studies write it
+from vesph.studies.die_swell import fmt, g6, run_scene, write_rows  # shared with the thesis studies
 
 CASE = os.path.join(ROOT, "cases", "die_swell_newtonian.toml")
 RHO, W, U = 1000.0, 0.01, 0.5            # the case's density, die width, feed mean velocity
@@ -79,10 +78,6 @@ DIE_INLET, DIE_EXIT = 0.15, 0.2
 RE_CASE, C_CASE = 0.5, 40.0              # the case's Reynolds number and sound speed
 FE_BAND = (1.186, 1.20)                  # finite elements, creeping planar Newtonian flow
 ORDER_RANGE = (0.5, 4.0)                 # observed orders outside: not asymptotic (flagged)
-
-
-def g6(x):
-    return float(f"{x:.6g}")
 
 
 def viscosity(re):
@@ -413,14 +408,6 @@ def compare(out, re, png=True):
     return 0
 
 
-def run_one(scene_path, d, vesph):
-    t0 = time.time()
-    with open(os.path.join(d, "run.log"), "w") as log:
-        rc = subprocess.call([vesph, "run", scene_path, "-o", d, "--quiet"], stdout=log,
-                             stderr=subprocess.STDOUT)
-    return rc, time.time() - t0
-
-
 def main(argv=None):
     from vesph.studies.die_swell import toml_dumps
 
@@ -490,7 +477,7 @@ def main(argv=None):
     if not a.measure_only:
         print(f"== {name}: {len(todo)} runs, {a.jobs} at once", flush=True)
         with concurrent.futures.ThreadPoolExecutor(a.jobs) as pool:
-            futs = {pool.submit(run_one, sp, d, a.vesph): lab for _, _, lab, d, sp in todo}
+            futs = {pool.submit(run_scene, sp, d, a.vesph): lab for _, _, lab, d, sp in todo}
             for f in concurrent.futures.as_completed(futs):
                 results[futs[f]] = f.result()
                 print(f"   {futs[f]}: exit {results[futs[f]][0]}, {results[futs[f]][1]:.0f} s",
