@@ -10,7 +10,8 @@ cmake --build build
 # two threads each on two cores wait at every barrier for a descheduled thread. The thread paths
 # are tested by cli.threads (--threads 1 against --threads 2, which overrides this).
 export OMP_NUM_THREADS=1
-ctest --test-dir build --output-on-failure -j 2
+# The long validations (label "long", tests/long) are left out: ctest --test-dir build -L long.
+ctest --test-dir build --output-on-failure -j 2 -LE long
 
 # Sanitizer build (address + undefined behaviour, CMake option VESPH_SANITIZE) in build-asan: every
 # unit test, the fuzz targets for the scene parser and the checkpoint reader among them
@@ -26,6 +27,6 @@ cmake --build build-asan
 # semi-implicit's match against the leapfrog runs for the Newtonian and Oldroyd-B models here (the
 # other three models in the Release suite only: each costs the sanitizer build about a minute).
 ctest --test-dir build-asan --output-on-failure -j 2 \
-  -E '^(cli|tools|docs)[.]|^linear solvers|^integrators: arkode-imex matches|^integrators: semi-implicit matches the leapfrog: (second-order fluid|UCM|XPP)$'
+  -E '^(cli|tools|docs|long)[.]|^linear solvers|^integrators: arkode-imex matches|^integrators: semi-implicit matches the leapfrog: (second-order fluid|UCM|XPP)$'
 ASAN_OPTIONS=detect_leaks=0 ctest --test-dir build-asan --output-on-failure -j 2 -R '^linear solvers|^integrators: arkode-imex matches'
 ctest --test-dir build-asan --output-on-failure -R '^cli[.](scene_errors|check_and_list|robustness)$'
