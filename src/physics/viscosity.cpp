@@ -10,6 +10,23 @@
 // Next to a wall the neighbour velocity is the wall's extrapolated no-slip velocity
 // (field "wall_velocity", vesph/boundary), which places the no-slip condition on the wall
 // surface rather than on the wall particles.
+//
+// form = "stress" (docs/theory.md §5.4 "The viscous free surface"): the divergence of the full
+// viscous stress, div(mu (grad v + grad v^T)) = mu lap v + div(mu grad v^T), with the first part
+// in Morris' form above and the second between fluid particles by the symmetric divergence of
+// thesis eq. (3.18) on mu kappa^T (kappa the velocity gradient of Fang eq. 23):
+//   dv_i/dt += sum_j m_j (mu kappa_i^T/rho_i^2 + mu kappa_j^T/rho_j^2) grad_i W_ij.
+// Inside the fluid the second part is mu grad(div v), which vanishes for an incompressible
+// flow. Where the kernel is cut by a free surface, each sum's missing neighbours leave a force on
+// a boundary term: the Laplacian's on mu dv/dn (its natural condition is dv/dn = 0, which a
+// rigid rotation or a swelling jet violates), the two together on the traction
+// mu (grad v + grad v^T).n, which with the pressure's makes the stress-free condition
+// (-p I + tau).n = 0 of a viscous free surface (for a linear velocity field the two sums add
+// up to the symmetric divergence of tau exactly). Morris' part keeps its damping of the
+// particle-scale velocity noise, which a divergence of kappa alone does not see (the nested
+// first derivatives' zero-energy modes: the die's extrudate falls apart with it, measured). Wall
+// particles enter Morris' part only, with their no-slip velocity (the wall friction).
+#include "vesph/physics/constitutive.hpp"  // Mat<D>
 #include "vesph/physics/registry.hpp"
 
 namespace vesph {
@@ -18,9 +35,11 @@ namespace {
 template <int D>
 class Viscosity final : public PairEffect<D, Viscosity<D>> {
  public:
-  explicit Viscosity(ConfigTable&) {}
+  explicit Viscosity(ConfigTable& cfg)
+      : stress_form_(cfg.choice("form", "laplacian", {"laplacian", "stress"}) == "stress") {}
   std::string_view name() const override { return "viscosity"; }
   Phase phase() const override { return Phase::forces; }
+  std::string_view form() const override { return stress_form_ ? "stress" : "laplacian"; }
 
   void setup(Setup<D>& s) override {
     // fluid.viscosity defaults to 0 (an inviscid scene needs none): this term needs it set.
@@ -29,6 +48,11 @@ class Viscosity final : public PairEffect<D, Viscosity<D>> {
                        "[effects.viscosity] for an inviscid fluid");
     mu_ = s.viscosity;
     nu_ = s.viscosity / s.rest_density;
+    if (stress_form_) {
+      kappa_ = s.particles.fields.find("velocity_gradient");  // set up before: gradients phase
+      if (!kappa_)
+        throw InputError("effects.viscosity.form = \"stress\" needs the velocity gradient: add [effects.velocity_gradient]");
+    }
     wall_velocity_ = s.particles.fields.find("wall_velocity");
     zero_velocity_.assign(D * s.particles.size(), 0.0);
   }
@@ -40,7 +64,9 @@ class Viscosity final : public PairEffect<D, Viscosity<D>> {
   }
   // Linear in the velocities (the wall velocities are extrapolated from them): implicit under
   // arkode-imex, which lifts the viscous step limit (docs/theory.md "Implicit-explicit integration").
-  ImplicitPart implicitPart() const override { return ImplicitPart::all; }
+  // The stress form reads kappa, which the gradients phase computes from the stage's velocities
+  // before this pass: it stays explicit (with its viscous step limit).
+  ImplicitPart implicitPart() const override { return stress_form_ ? ImplicitPart::none : ImplicitPart::all; }
 
   // d(dv_i/dt)/dv_j = -w_ij for a fluid neighbour j, and the diagonal sum_j w_ij. A wall
   // neighbour b's velocity is extrapolated from the fluid's, v_b = ... + sum_f c_bf v_f (the
@@ -50,12 +76,13 @@ class Viscosity final : public PairEffect<D, Viscosity<D>> {
   // M-matrix, which BoomerAMG needs (with the entries in place, of the opposite sign to the
   // fluid's, its V-cycle let GMRES fail on the die swell; lumped, GMRES takes 2.9 times fewer
   // iterations there than with the Jacobi preconditioner: docs/performance.md).
-  bool couplesVelocities() const override { return true; }
+  bool couplesVelocities() const override { return !stress_form_; }
   void velocityCoupling(const RhsContext<D>& ctx, Index i, std::span<const Neighbour<D>> moving,
                         std::span<const Neighbour<D>> fixed, std::span<const double> wall_dependence,
                         VelocityCouplingRow& row) const override {
     const ParticleSet<D>& p = ctx.particles;
-    const Local l{Vec<D>::Zero(), Vec<D>::Zero(), 2.0 * mu_ / p.density[i], nullptr, p.density.data(), p.mass.data(), nullptr, 0};
+    const Local l{Vec<D>::Zero(), Vec<D>::Zero(), 2.0 * mu_ / p.density[i], nullptr, p.density.data(), p.mass.data(), nullptr, 0,
+                  Mat<D>::Zero(), nullptr};
     double diagonal = 0;
     for (const Neighbour<D>& nb : moving) {
       const double w = weight(nb, l);
@@ -78,6 +105,8 @@ class Viscosity final : public PairEffect<D, Viscosity<D>> {
     const double* m;
     const double* fixed_velocity;  // velocities presented by fixed particles (index j - n_fixed0)
     std::size_t fixed0;
+    Mat<D> tauT_i_over_rho2;       // stress form: mu kappa_i^T / rho_i^2
+    const double* kappa;           // stress form: the velocity gradients (row-major D x D)
   };
   Local begin(const RhsContext<D>& ctx, Index i) const {
     const ParticleSet<D>& p = ctx.particles;
@@ -88,13 +117,23 @@ class Viscosity final : public PairEffect<D, Viscosity<D>> {
       // with v_i = 1 and every v_j = 0 (the wall velocities' dependence on v_i through the
       // extrapolation left out).
       return {Vec<D>::Zero(), Vec<D>::Ones(), 2.0 * mu_ / p.density[i], zero_velocity_.data(), p.density.data(),
-              p.mass.data(), zero_velocity_.data(), 0};
+              p.mass.data(), zero_velocity_.data(), 0, Mat<D>::Zero(), nullptr};
     }
-    return {Vec<D>::Zero(), p.v(i), 2.0 * mu_ / p.density[i], p.velocity.data(), p.density.data(), p.mass.data(), fv, fixed0};
+    if (stress_form_) {
+      const double rho = p.density[i];
+      return {Vec<D>::Zero(), p.v(i), 2.0 * mu_ / rho, p.velocity.data(), p.density.data(), p.mass.data(), fv, fixed0,
+              transposedStress(kappa_->data.data(), i) / (rho * rho), kappa_->data.data()};
+    }
+    return {Vec<D>::Zero(), p.v(i), 2.0 * mu_ / p.density[i], p.velocity.data(), p.density.data(), p.mass.data(), fv, fixed0,
+            Mat<D>::Zero(), nullptr};
   }
   void pair(const RhsContext<D>&, Index, const Neighbour<D>& nb, Local& l) const {
     const double w = weight(nb, l);
     for (int a = 0; a < D; ++a) l.acc[a] += w * (l.vi[a] - l.v[D * nb.j + a]);
+    if (stress_form_) {  // eq. (3.18) on mu kappa^T; grad_i W_ij = F_ij r_ij
+      const double inv_rho = 1.0 / l.rho[nb.j];
+      l.acc += (l.m[nb.j] * nb.F) * ((l.tauT_i_over_rho2 + transposedStress(l.kappa, nb.j) * (inv_rho * inv_rho)) * nb.rij);
+    }
   }
   void pairFixed(const RhsContext<D>&, Index, const Neighbour<D>& nb, Local& l) const {
     const double w = weight(nb, l);
@@ -108,7 +147,14 @@ class Viscosity final : public PairEffect<D, Viscosity<D>> {
   double weight(const Neighbour<D>& nb, const Local& l) const {
     return l.m[nb.j] * l.two_mu_over_rhoi / l.rho[nb.j] * nb.F;
   }
+  // mu kappa^T of particle j (kappa^{ab} = dv^a/dx^b, stored row-major: its transpose is the
+  // same numbers read column-major).
+  Mat<D> transposedStress(const double* kappa, Index j) const {
+    return mu_ * Eigen::Map<const Mat<D>>(kappa + D * D * j);
+  }
 
+  bool stress_form_ = false;
+  const Field* kappa_ = nullptr;
   double mu_ = 0, nu_ = 0;
   const Field* wall_velocity_ = nullptr;
   std::vector<double> zero_velocity_;  // all neighbour velocities, for the Jacobian's diagonal
