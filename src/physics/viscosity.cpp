@@ -32,14 +32,22 @@
 namespace vesph {
 namespace {
 
+struct Nothing {};
 template <int D>
-class Viscosity final : public PairEffect<D, Viscosity<D>> {
+struct TransposedStressOf {
+  Mat<D> i_over_rho2;    // mu kappa_i^T / rho_i^2
+  const double* kappa;   // the velocity gradients (row-major D x D)
+};
+
+// The form is a template argument: the Laplacian's pair loop carries nothing of the stress form
+// (a run-time switch cost 4 % of the Poiseuille scene's pair rate).
+template <int D, bool StressForm>
+class Viscosity final : public PairEffect<D, Viscosity<D, StressForm>> {
  public:
-  explicit Viscosity(ConfigTable& cfg)
-      : stress_form_(cfg.choice("form", "laplacian", {"laplacian", "stress"}) == "stress") {}
+  explicit Viscosity(ConfigTable&) {}
   std::string_view name() const override { return "viscosity"; }
   Phase phase() const override { return Phase::forces; }
-  std::string_view form() const override { return stress_form_ ? "stress" : "laplacian"; }
+  std::string_view form() const override { return StressForm ? "stress" : "laplacian"; }
 
   void setup(Setup<D>& s) override {
     // fluid.viscosity defaults to 0 (an inviscid scene needs none): this term needs it set.
@@ -48,7 +56,7 @@ class Viscosity final : public PairEffect<D, Viscosity<D>> {
                        "[effects.viscosity] for an inviscid fluid");
     mu_ = s.viscosity;
     nu_ = s.viscosity / s.rest_density;
-    if (stress_form_) {
+    if constexpr (StressForm) {
       kappa_ = s.particles.fields.find("velocity_gradient");  // set up before: gradients phase
       if (!kappa_)
         throw InputError("effects.viscosity.form = \"stress\" needs the velocity gradient: add [effects.velocity_gradient]");
@@ -66,7 +74,7 @@ class Viscosity final : public PairEffect<D, Viscosity<D>> {
   // arkode-imex, which lifts the viscous step limit (docs/theory.md "Implicit-explicit integration").
   // The stress form reads kappa, which the gradients phase computes from the stage's velocities
   // before this pass: it stays explicit (with its viscous step limit).
-  ImplicitPart implicitPart() const override { return stress_form_ ? ImplicitPart::none : ImplicitPart::all; }
+  ImplicitPart implicitPart() const override { return StressForm ? ImplicitPart::none : ImplicitPart::all; }
 
   // d(dv_i/dt)/dv_j = -w_ij for a fluid neighbour j, and the diagonal sum_j w_ij. A wall
   // neighbour b's velocity is extrapolated from the fluid's, v_b = ... + sum_f c_bf v_f (the
@@ -76,13 +84,12 @@ class Viscosity final : public PairEffect<D, Viscosity<D>> {
   // M-matrix, which BoomerAMG needs (with the entries in place, of the opposite sign to the
   // fluid's, its V-cycle let GMRES fail on the die swell; lumped, GMRES takes 2.9 times fewer
   // iterations there than with the Jacobi preconditioner: docs/performance.md).
-  bool couplesVelocities() const override { return !stress_form_; }
+  bool couplesVelocities() const override { return !StressForm; }
   void velocityCoupling(const RhsContext<D>& ctx, Index i, std::span<const Neighbour<D>> moving,
                         std::span<const Neighbour<D>> fixed, std::span<const double> wall_dependence,
                         VelocityCouplingRow& row) const override {
     const ParticleSet<D>& p = ctx.particles;
-    const Local l{Vec<D>::Zero(), Vec<D>::Zero(), 2.0 * mu_ / p.density[i], nullptr, p.density.data(), p.mass.data(), nullptr, 0,
-                  Mat<D>::Zero(), nullptr};
+    const Local l{Vec<D>::Zero(), Vec<D>::Zero(), 2.0 * mu_ / p.density[i], nullptr, p.density.data(), p.mass.data(), nullptr, 0, {}};
     double diagonal = 0;
     for (const Neighbour<D>& nb : moving) {
       const double w = weight(nb, l);
@@ -105,8 +112,7 @@ class Viscosity final : public PairEffect<D, Viscosity<D>> {
     const double* m;
     const double* fixed_velocity;  // velocities presented by fixed particles (index j - n_fixed0)
     std::size_t fixed0;
-    Mat<D> tauT_i_over_rho2;       // stress form: mu kappa_i^T / rho_i^2
-    const double* kappa;           // stress form: the velocity gradients (row-major D x D)
+    [[no_unique_address]] std::conditional_t<StressForm, TransposedStressOf<D>, Nothing> transposed;
   };
   Local begin(const RhsContext<D>& ctx, Index i) const {
     const ParticleSet<D>& p = ctx.particles;
@@ -117,22 +123,22 @@ class Viscosity final : public PairEffect<D, Viscosity<D>> {
       // with v_i = 1 and every v_j = 0 (the wall velocities' dependence on v_i through the
       // extrapolation left out).
       return {Vec<D>::Zero(), Vec<D>::Ones(), 2.0 * mu_ / p.density[i], zero_velocity_.data(), p.density.data(),
-              p.mass.data(), zero_velocity_.data(), 0, Mat<D>::Zero(), nullptr};
+              p.mass.data(), zero_velocity_.data(), 0, {}};
     }
-    if (stress_form_) {
+    Local l{Vec<D>::Zero(), p.v(i), 2.0 * mu_ / p.density[i], p.velocity.data(), p.density.data(), p.mass.data(), fv, fixed0, {}};
+    if constexpr (StressForm) {
       const double rho = p.density[i];
-      return {Vec<D>::Zero(), p.v(i), 2.0 * mu_ / rho, p.velocity.data(), p.density.data(), p.mass.data(), fv, fixed0,
-              transposedStress(kappa_->data.data(), i) / (rho * rho), kappa_->data.data()};
+      l.transposed = {transposedStress(kappa_->data.data(), i) / (rho * rho), kappa_->data.data()};
     }
-    return {Vec<D>::Zero(), p.v(i), 2.0 * mu_ / p.density[i], p.velocity.data(), p.density.data(), p.mass.data(), fv, fixed0,
-            Mat<D>::Zero(), nullptr};
+    return l;
   }
   void pair(const RhsContext<D>&, Index, const Neighbour<D>& nb, Local& l) const {
     const double w = weight(nb, l);
     for (int a = 0; a < D; ++a) l.acc[a] += w * (l.vi[a] - l.v[D * nb.j + a]);
-    if (stress_form_) {  // eq. (3.18) on mu kappa^T; grad_i W_ij = F_ij r_ij
+    if constexpr (StressForm) {  // eq. (3.18) on mu kappa^T; grad_i W_ij = F_ij r_ij
       const double inv_rho = 1.0 / l.rho[nb.j];
-      l.acc += (l.m[nb.j] * nb.F) * ((l.tauT_i_over_rho2 + transposedStress(l.kappa, nb.j) * (inv_rho * inv_rho)) * nb.rij);
+      l.acc += (l.m[nb.j] * nb.F) *
+               ((l.transposed.i_over_rho2 + transposedStress(l.transposed.kappa, nb.j) * (inv_rho * inv_rho)) * nb.rij);
     }
   }
   void pairFixed(const RhsContext<D>&, Index, const Neighbour<D>& nb, Local& l) const {
@@ -153,7 +159,6 @@ class Viscosity final : public PairEffect<D, Viscosity<D>> {
     return mu_ * Eigen::Map<const Mat<D>>(kappa + D * D * j);
   }
 
-  bool stress_form_ = false;
   const Field* kappa_ = nullptr;
   double mu_ = 0, nu_ = 0;
   const Field* wall_velocity_ = nullptr;
@@ -161,5 +166,13 @@ class Viscosity final : public PairEffect<D, Viscosity<D>> {
 };
 
 }  // namespace
-VESPH_EFFECT_FACTORY(makeViscosity, Viscosity)
+
+template <int D>
+std::unique_ptr<Effect<D>> makeViscosity(ConfigTable& cfg) {
+  if (cfg.choice("form", "laplacian", {"laplacian", "stress"}) == "stress")
+    return std::make_unique<Viscosity<D, true>>(cfg);
+  return std::make_unique<Viscosity<D, false>>(cfg);
+}
+template std::unique_ptr<Effect<2>> makeViscosity<2>(ConfigTable&);
+template std::unique_ptr<Effect<3>> makeViscosity<3>(ConfigTable&);
 }  // namespace vesph

@@ -31,7 +31,8 @@ for n in 10 25; do
 done
 # The convergence study's scenes (the Newtonian case at 10, 16, 25 across, Re 0.5 and 0.01),
 # plain and with each of its variants, are valid scenes: `vesph check` accepts each.
-for v in "" "--wall-floor 0" "--xsph 0" "--delta 0.02" "--shifting 1" "--sound-speed 80"; do
+for v in "" "--wall-floor 0" "--xsph 0" "--delta 0.02" "--shifting 1" "--sound-speed 80" "--smoothing-ratio 1" \
+    "--viscous-form stress" "--viscous-form stress_renormalised"; do
   # shellcheck disable=SC2086
   $PY "$SRC/tools/die_swell_study.py" convergence $v --dry-run --out "$WORK/conv" >"$WORK/conv.log" 2>&1 \
     || fail "die_swell_study convergence $v --dry-run: $(tail -3 "$WORK/conv.log")"
@@ -41,5 +42,5 @@ for f in "$WORK"/conv/*/*/*.toml; do
   count=$((count + 1))
   "$VESPH" check "$f" >/dev/null 2>"$WORK/check.err" && pass || fail "vesph check $f: $(tail -2 "$WORK/check.err")"
 done
-[ "$count" = 36 ] && pass || fail "die_swell_study convergence wrote $count scenes, expected 36"
+[ "$count" = 54 ] && pass || fail "die_swell_study convergence wrote $count scenes, expected 54"
 finish

@@ -292,8 +292,24 @@ def make_die_swell_convergence_tests(tmp):
                 {k: x for k, x in ref.items() if k not in ("effects", "blocks")}
             expect(ok and others, f"variant {v}: {s}")
             expect(dsc.variant_suffix(v) != "", f"variant {v} has no folder suffix")
+        # the viscous forms change the effects only; the smoothing ratio the particles only
+        for form, gradient in (("stress", {}), ("stress_renormalised", {"form": "renormalised"})):
+            s = dsc.scene(10, 0.5, {"viscous_form": form})
+            e, e0 = s["effects"], ref["effects"]
+            rest = {k: x for k, x in e.items() if k not in ("viscosity", "velocity_gradient")}
+            expect(e["viscosity"] == {"form": "stress"} and e["velocity_gradient"] == gradient
+                   and "velocity_gradient" not in e0 and rest == {k: x for k, x in e0.items() if k != "viscosity"}
+                   and {k: x for k, x in s.items() if k != "effects"} == {k: x for k, x in ref.items() if k != "effects"},
+                   f"viscous form {form}: {s}")
+            expect(dsc.variant_suffix({"viscous_form": form}) == "_" + form, f"{form}: suffix")
+        s = dsc.scene(10, 0.5, {"smoothing_ratio": 1.0})
+        expect(s["particles"]["smoothing_ratio"] == 1.0
+               and {k: x for k, x in s.items() if k != "particles"} == {k: x for k, x in ref.items() if k != "particles"},
+               f"smoothing ratio: {s['particles']}")
+        expect(dsc.variant_suffix({"smoothing_ratio": 1.0}) == "_h1", "smoothing ratio: suffix")
         expect(dsc.variant_suffix({"wall_floor": None, "xsph": None, "delta": None, "shifting": 0.0,
-                                   "sound_speed": None, "integrator": None}) == "", "no variant: no suffix")
+                                   "sound_speed": None, "integrator": None, "smoothing_ratio": None,
+                                   "viscous_form": None}) == "", "no variant: no suffix")
 
     def command():
         rc, out, err = tool("die_swell_study.py", "convergence", "--across", "10", "16", "--re", "0.5",
@@ -304,7 +320,8 @@ def make_die_swell_convergence_tests(tmp):
             s = tomllib.load(fh)
         expect(s["time"]["end"] == 0.2 and "xsph" not in s["effects"], f"scene written: {s}")
         for bad in (["--across", "3", "10", "16"], ["--re", "0"], ["--stations", "0.19"],
-                    ["--xsph", "2"], ["--across", "10", "10", "16"]):
+                    ["--xsph", "2"], ["--across", "10", "10", "16"], ["--smoothing-ratio", "2"],
+                    ["--viscous-form", "tensor"]):
             rc, out, err = tool("die_swell_study.py", "convergence", *bad, "--dry-run", "--out", d)
             expect(rc == 2, f"{bad}: exit {rc}", out + err)
 

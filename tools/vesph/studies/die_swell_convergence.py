@@ -6,7 +6,7 @@ Usage
     /usr/bin/python3 tools/die_swell_study.py convergence
         [--across N N N ...] [--re RE ...] [--end T] [--interval T] [--stations X ...]
         [--wall-floor P] [--xsph EPS] [--delta D] [--shifting A] [--sound-speed C]
-        [--integrator TYPE] [--jobs J] [--out DIR] [--vesph PATH]
+        [--integrator TYPE] [--smoothing-ratio R] [--viscous-form FORM] [--jobs J] [--out DIR] [--vesph PATH]
         [--dry-run] [--measure-only] [--no-png] [--compare]
 
 Runs the Newtonian planar die of cases/die_swell_newtonian.toml (W = 0.01 m, exit x = 0.2 m,
@@ -40,7 +40,11 @@ Variants (one thing at a time against the case; each adds a suffix to the study'
 [effects.xsph]; _xsphEPS), --delta D (0 deletes [effects.density_diffusion]; _deltaD),
 --shifting A (particle shifting, coefficient A, speed U, with [effects.free_surface] at 0.8;
 _shiftingA), --sound-speed C (m/s, instead of the rule above; _cC), --integrator TYPE
-(_TYPE).
+(_TYPE), --smoothing-ratio R (h/dx instead of 1.6, R <= 5/3 so that the five dummy layers
+hold the support 3h; _hR: tells whether a trend follows the kernel's width h or the spacing
+dx), --viscous-form stress | stress_renormalised ([effects.viscosity] form = "stress", the
+stress-free viscous surface of docs/theory.md §5.4, with the velocity gradient of Fang eq. 23 or
+renormalised; _stress, _stress_renormalised). Variants combine: each given one changes the scene.
 
 Outputs: OUT/convergence[SUFFIX]/re<Re>_n<N>/ (the scene, the vesph output and log, the
 measure's files), OUT/convergence[SUFFIX]/convergence[SUFFIX].csv (one row per run),
@@ -51,7 +55,7 @@ measure's files), OUT/convergence[SUFFIX]/convergence[SUFFIX].csv (one row per r
 --compare runs nothing: it reads every OUT/convergence*/convergence*.csv (the case and each
 variant measured so far; the folders' CSVs hold the runs of their last invocation, so run
 --measure-only over all the resolutions of a folder first), prints one table (swell per variant
-and resolution) and plots envelope and flux against dx/W per variant at the first --re in
+and resolution) and plots envelope and flux against h/W (the kernel's width) per variant at the first --re in
 OUT/convergence_variants.png.
 
 Exit status: 0 when every run was made or tabulated; 1 when a run could not be measured at
@@ -108,6 +112,10 @@ def variant_suffix(v):
         s += f"_c{v['sound_speed']:g}"
     if v.get("integrator"):
         s += f"_{v['integrator']}"
+    if v.get("smoothing_ratio") is not None:
+        s += f"_h{v['smoothing_ratio']:g}"
+    if v.get("viscous_form") in ("stress", "stress_renormalised"):
+        s += "_" + v["viscous_form"]
     return s
 
 
@@ -150,6 +158,15 @@ def scene(n, re, variant=None, end=None, interval=None):
         e["particle_shifting"] = {"coefficient": g6(v["shifting"]), "speed": U}
     if v.get("integrator"):
         s["integrator"] = {"type": v["integrator"]}
+    if v.get("smoothing_ratio") is not None:
+        s["particles"]["smoothing_ratio"] = g6(v["smoothing_ratio"])
+    if v.get("viscous_form") in ("stress", "stress_renormalised"):
+        # The divergence of the full viscous stress mu (grad v + grad v^T): Morris' Laplacian
+        # plus the symmetric divergence of mu kappa^T ([effects.viscosity] form = "stress",
+        # docs/theory.md §5.4), the stress-free condition of a viscous free surface; kappa by
+        # Fang eq. (23) or renormalised (exact for a linear field at the surface).
+        e["viscosity"] = {"form": "stress"}
+        e["velocity_gradient"] = ({"form": "renormalised"} if v["viscous_form"] == "stress_renormalised" else {})
     if end is not None:
         s["time"]["end"] = g6(end)
     if interval is not None:
@@ -264,6 +281,16 @@ def flux_ratio(h5, stations, t0, t1, u_feed=U, die_width=W, window=4.0):
         r.close()
 
 
+def smoothing_length(d, lab, dx):
+    """h of the run's scene (its particles.smoothing_ratio times dx; the case's 1.6 when the
+    scene is not there)."""
+    try:
+        with open(os.path.join(d, lab + ".toml"), "rb") as fh:
+            return dx * float(tomllib.load(fh)["particles"].get("smoothing_ratio", 1.6))
+    except (OSError, KeyError, ValueError, tomllib.TOMLDecodeError):
+        return dx * 1.6
+
+
 def measure_run(d, lab, re, n, stations, rc=None, wall=math.nan, png=True):
     """The study's row of one run (None when it left neither output nor summary)."""
     from vesph.studies.die_swell import extrudate_clusters, run_summary
@@ -273,7 +300,8 @@ def measure_run(d, lab, re, n, stations, rc=None, wall=math.nan, png=True):
     js, rc, wall = run_summary(d, rc, wall)
     if measure_only and js is None and not os.path.exists(h5):
         return None
-    row = {"label": lab, "Re": re, "across": n, "dx_m": W / n, "mu_Pa_s": viscosity(re),
+    row = {"label": lab, "Re": re, "across": n, "dx_m": W / n, "h_m": smoothing_length(d, lab, W / n),
+           "mu_Pa_s": viscosity(re),
            "exit_status": rc, "status": (js or {}).get("status", ""),
            "end_time_s": (js or {}).get("final_time", math.nan),
            "steps": (js or {}).get("steps", math.nan), "wall_s": wall}
@@ -307,7 +335,7 @@ def measure_run(d, lab, re, n, stations, rc=None, wall=math.nan, png=True):
     return row
 
 
-COLUMNS = ["label", "Re", "across", "dx_m", "mu_Pa_s", "exit_status", "status", "end_time_s",
+COLUMNS = ["label", "Re", "across", "dx_m", "h_m", "mu_Pa_s", "exit_status", "status", "end_time_s",
            "steps", "wall_s", "envelope", "envelope_std", "filled", "filled_std", "flux",
            "flux_std", "frames_used", "window_from_s", "window_to_s", "clusters", "detached",
            "message"]
@@ -369,16 +397,17 @@ def compare(out, re, png=True):
         with open(path, newline="") as fh:
             rows = [r for r in csv.DictReader(fh) if float(r["Re"]) == re]
         if rows:
-            series[name] = sorted(rows, key=lambda r: int(r["across"]))
+            series[name] = sorted(rows, key=lambda r: float(r.get("h_m") or 1.6 * float(r["dx_m"])))
     if not series:
         print(f"no convergence*.csv with Re = {re:g} under {out}")
         return 1
     num = lambda r, k: float(r[k]) if r.get(k) not in (None, "") else math.nan  # noqa: E731
     print(f"== die swell variants at Re = {re:g} (steady mean +- std over the window)")
-    print(f"   {'variant':<34}{'N':>4}{'envelope':>16}{'filled':>9}{'flux':>16}{'wall s':>8}")
+    print(f"   {'variant':<34}{'N':>4}{'h/W':>7}{'envelope':>16}{'filled':>9}{'flux':>16}{'wall s':>8}")
     for name, rows in series.items():
         for r in rows:
-            print(f"   {name:<34}{int(r['across']):>4}"
+            h = num(r, "h_m") if math.isfinite(num(r, "h_m")) else 1.6 * num(r, "dx_m")
+            print(f"   {name:<34}{int(r['across']):>4}{h / W:>7.3f}"
                   f"{num(r, 'envelope'):>9.3f} +-{num(r, 'envelope_std'):.3f}{num(r, 'filled'):>9.3f}"
                   f"{num(r, 'flux'):>9.3f} +-{num(r, 'flux_std'):.3f}{num(r, 'wall_s'):>8.0f}")
     if not png:
@@ -391,11 +420,13 @@ def compare(out, re, png=True):
     for ax, q in zip(axes, ("envelope", "flux")):
         ax.axhspan(*FE_BAND, color="0.85", label="finite elements, creeping flow")
         for name, rows in series.items():
-            x = [1.0 / int(r["across"]) for r in rows]
+            # against the kernel's width h (the swell follows h, not dx: docs/notes/die_swell.md);
+            # CSVs written before the h_m column have the case's h = 1.6 dx
+            x = [(num(r, "h_m") if math.isfinite(num(r, "h_m")) else 1.6 * num(r, "dx_m")) / W for r in rows]
             ax.errorbar(x, [num(r, q) for r in rows], yerr=[num(r, q + "_std") for r in rows],
                         marker="o", capsize=3, label=name.replace("convergence", "case") or "case")
         ax.set_xlim(left=0.0)
-        ax.set_xlabel("dx / W")
+        ax.set_xlabel("h / W")
         ax.set_title(f"{q} swell, Re = {re:g}")
         ax.grid(alpha=0.3)
     axes[0].set_ylabel("steady swell ratio")
@@ -426,6 +457,13 @@ def main(argv=None):
     ap.add_argument("--shifting", type=float, default=0.0, metavar="A")
     ap.add_argument("--sound-speed", type=float, default=None, metavar="C")
     ap.add_argument("--integrator", default=None, metavar="TYPE")
+    ap.add_argument("--viscous-form", choices=["laplacian", "stress", "stress_renormalised"], default=None,
+                    help="stress: [effects.viscosity] form = \"stress\" (Morris' Laplacian plus "
+                         "the symmetric divergence of mu kappa^T: the stress-free surface); "
+                         "stress_renormalised: the same with the renormalised velocity gradient")
+    ap.add_argument("--smoothing-ratio", type=float, default=None, metavar="R",
+                    help="h/dx instead of the case's 1.6 (the dummy layers stay 5 dx deep: "
+                         "R <= 1.66 with the quintic kernel's support 3h)")
     ap.add_argument("--jobs", type=int, default=1, metavar="J")
     ap.add_argument("--out", default="out/die_swell_study", metavar="DIR")
     ap.add_argument("--vesph", default=os.path.join(ROOT, "build", "vesph"), metavar="PATH")
@@ -449,12 +487,16 @@ def main(argv=None):
         ap.error("--delta and --shifting must be >= 0")
     if a.sound_speed is not None and a.sound_speed <= 0:
         ap.error("--sound-speed must be > 0")
+    if a.smoothing_ratio is not None and not (0.8 <= a.smoothing_ratio <= 5.0 / 3.0):
+        ap.error("--smoothing-ratio must lie in [0.8, 5/3]: the five dummy layers must hold the "
+                 "quintic kernel's support 3h")
     if a.wall_floor is not None and not math.isfinite(a.wall_floor):
         ap.error("--wall-floor must be a finite pressure (Pa)")
     if not (a.dry_run or a.measure_only) and not shutil.which(a.vesph) and not os.path.exists(a.vesph):
         ap.error(f"--vesph {a.vesph}: no such executable (build first: see README)")
     variant = {"wall_floor": a.wall_floor, "xsph": a.xsph, "delta": a.delta,
-               "shifting": a.shifting, "sound_speed": a.sound_speed, "integrator": a.integrator}
+               "shifting": a.shifting, "sound_speed": a.sound_speed, "integrator": a.integrator,
+               "smoothing_ratio": a.smoothing_ratio, "viscous_form": a.viscous_form}
     name = "convergence" + variant_suffix(variant)
     sd = os.path.join(a.out, name)
     todo = []
