@@ -9,7 +9,7 @@ namespace vesph {
   X(continuity, makeContinuity, "density rate, Fang et al. eq. (26)")                          \
   X(equation_of_state, makeEquationOfState, "WCSPH pressure p = p0 + c^2 (rho - rho0), thesis 3.5") \
   X(pressure_gradient, makePressureGradient, "-grad(p)/rho, thesis eq. (3.18) or (3.17)")        \
-  X(viscosity, makeViscosity, "Newtonian viscous force by the SPH Laplacian, thesis eq. (3.37)") \
+  X(viscosity, makeViscosity, "Newtonian viscous force by the SPH Laplacian, thesis eq. (3.37) (form: laplacian, or stress for a stress-free free surface)") \
   X(body_force, makeBodyForce, "constant body acceleration (driving force, gravity)")                \
   X(velocity_gradient, makeVelocityGradient, "velocity gradient kappa, Fang et al. eq. (23)")       \
   X(stress_divergence, makeStressDivergence, "elastic stress force div(S)/rho, Fang et al. eq. (27)") \

@@ -24,8 +24,9 @@
 // (-p I + tau).n = 0 of a viscous free surface (for a linear velocity field the two sums add
 // up to the symmetric divergence of tau exactly). Morris' part keeps its damping of the
 // particle-scale velocity noise, which a divergence of kappa alone does not see (the nested
-// first derivatives' zero-energy modes: the die's extrudate falls apart with it, measured). Wall
-// particles enter Morris' part only, with their no-slip velocity (the wall friction).
+// first derivatives' zero-energy modes: with tau = mu (kappa + kappa^T) in eq. 3.18 alone the
+// die's extrudate fell apart, measured). Wall particles enter Morris' part only, with their
+// no-slip velocity (the wall friction).
 #include "vesph/physics/constitutive.hpp"  // Mat<D>
 #include "vesph/physics/registry.hpp"
 
