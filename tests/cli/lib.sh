@@ -54,3 +54,14 @@ stiff_poiseuille() {
   $PY -c "import sys; sys.exit(0 if float(sys.argv[1]) >= 20 * float(sys.argv[2]) * (1 - 1e-9) else 1)" "$dt" "$viscous_limit" \
     && pass || fail "$label: median step $dt s is not 20 times the viscous limit $viscous_limit s"
 }
+# The open channel of cases/channel_inflow_outflow.toml to t = 0.35 s under integrator $1
+# (tests/cli/inflow_outflow.sh, tests/long/inflow_outflow_integrators.sh): the particle accounting
+# and the Poiseuille profile within 3 % (tools/inflow_check.py), and flow counts in summary.json.
+open_channel() {
+  integ=$1
+  expect 0 "ok: finished" -- "$VESPH" run "$SRC/cases/channel_inflow_outflow.toml" -o "$WORK/$integ" --quiet --set time.end=0.35 --set "integrator.type=\"$integ\""
+  $PY "$SRC/tools/inflow_check.py" "$WORK/$integ/channel_inflow_outflow.h5" --profile-x 0.015 --mean-velocity 0.1 \
+    --from 0.25 >"$WORK/$integ.log" 2>&1 && pass || fail "$integ: $(tail -8 "$WORK/$integ.log")"
+  grep -q '"released": [1-9]' "$WORK/$integ/summary.json" && grep -q '"removed": [1-9]' "$WORK/$integ/summary.json" && pass ||
+    fail "$integ: summary.json has no flow counts"
+}
