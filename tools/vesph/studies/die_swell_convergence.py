@@ -80,6 +80,7 @@ CASE = os.path.join(ROOT, "cases", "die_swell_newtonian.toml")
 RHO, W, U = 1000.0, 0.01, 0.5            # the case's density, die width, feed mean velocity
 DIE_INLET, DIE_EXIT = 0.15, 0.2
 RE_CASE, C_CASE = 0.5, 40.0              # the case's Reynolds number and sound speed
+H_OVER_DX_CASE = 1.6                     # the case's smoothing ratio h/dx
 FE_BAND = (1.186, 1.20)                  # finite elements, creeping planar Newtonian flow
 ORDER_RANGE = (0.5, 4.0)                 # observed orders outside: not asymptotic (flagged)
 
@@ -286,9 +287,15 @@ def smoothing_length(d, lab, dx):
     scene is not there)."""
     try:
         with open(os.path.join(d, lab + ".toml"), "rb") as fh:
-            return dx * float(tomllib.load(fh)["particles"].get("smoothing_ratio", 1.6))
+            return dx * float(tomllib.load(fh)["particles"].get("smoothing_ratio", H_OVER_DX_CASE))
     except (OSError, KeyError, ValueError, tomllib.TOMLDecodeError):
-        return dx * 1.6
+        return dx * H_OVER_DX_CASE
+
+
+def row_h(r):
+    """h (m) of a CSV row; rows written before the h_m column have the case's h = 1.6 dx."""
+    h = r.get("h_m")
+    return float(h) if h not in (None, "") else H_OVER_DX_CASE * float(r["dx_m"])
 
 
 def measure_run(d, lab, re, n, stations, rc=None, wall=math.nan, png=True):
@@ -397,7 +404,7 @@ def compare(out, re, png=True):
         with open(path, newline="") as fh:
             rows = [r for r in csv.DictReader(fh) if float(r["Re"]) == re]
         if rows:
-            series[name] = sorted(rows, key=lambda r: float(r.get("h_m") or 1.6 * float(r["dx_m"])))
+            series[name] = sorted(rows, key=row_h)
     if not series:
         print(f"no convergence*.csv with Re = {re:g} under {out}")
         return 1
@@ -406,8 +413,7 @@ def compare(out, re, png=True):
     print(f"   {'variant':<34}{'N':>4}{'h/W':>7}{'envelope':>16}{'filled':>9}{'flux':>16}{'wall s':>8}")
     for name, rows in series.items():
         for r in rows:
-            h = num(r, "h_m") if math.isfinite(num(r, "h_m")) else 1.6 * num(r, "dx_m")
-            print(f"   {name:<34}{int(r['across']):>4}{h / W:>7.3f}"
+            print(f"   {name:<34}{int(r['across']):>4}{row_h(r) / W:>7.3f}"
                   f"{num(r, 'envelope'):>9.3f} +-{num(r, 'envelope_std'):.3f}{num(r, 'filled'):>9.3f}"
                   f"{num(r, 'flux'):>9.3f} +-{num(r, 'flux_std'):.3f}{num(r, 'wall_s'):>8.0f}")
     if not png:
@@ -420,9 +426,8 @@ def compare(out, re, png=True):
     for ax, q in zip(axes, ("envelope", "flux")):
         ax.axhspan(*FE_BAND, color="0.85", label="finite elements, creeping flow")
         for name, rows in series.items():
-            # against the kernel's width h (the swell follows h, not dx: docs/notes/die_swell.md);
-            # CSVs written before the h_m column have the case's h = 1.6 dx
-            x = [(num(r, "h_m") if math.isfinite(num(r, "h_m")) else 1.6 * num(r, "dx_m")) / W for r in rows]
+            # against the kernel's width h (the swell follows h, not dx: docs/notes/die_swell.md)
+            x = [row_h(r) / W for r in rows]
             ax.errorbar(x, [num(r, q) for r in rows], yerr=[num(r, q + "_std") for r in rows],
                         marker="o", capsize=3, label=name.replace("convergence", "case") or "case")
         ax.set_xlim(left=0.0)
@@ -463,7 +468,7 @@ def main(argv=None):
                          "stress_renormalised: the same with the renormalised velocity gradient")
     ap.add_argument("--smoothing-ratio", type=float, default=None, metavar="R",
                     help="h/dx instead of the case's 1.6 (the dummy layers stay 5 dx deep: "
-                         "R <= 1.66 with the quintic kernel's support 3h)")
+                         "R <= 5/3 with the quintic kernel's support 3h)")
     ap.add_argument("--jobs", type=int, default=1, metavar="J")
     ap.add_argument("--out", default="out/die_swell_study", metavar="DIR")
     ap.add_argument("--vesph", default=os.path.join(ROOT, "build", "vesph"), metavar="PATH")
