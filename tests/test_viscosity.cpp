@@ -1,7 +1,8 @@
 // The Newtonian viscous force (src/physics/viscosity.cpp) in its two forms: Morris' Laplacian
 // (thesis eq. 3.37, form = "laplacian", the default) and the stress form (form = "stress":
 // tau = mu (kappa + kappa^T) and its symmetric divergence, thesis eq. 3.18, between fluid
-// particles; docs/theory.md §5.4). Each runs inside a real SphSystem built by hand, with only
+// particles; docs/theory.md §5.4). Each runs inside a real SphSystem built by hand
+// (tests/hand_built_system.hpp), with only
 // [effects.equation_of_state] beside it (pressure, no force) and, for the stress form,
 // [effects.velocity_gradient], so dv/dt is the viscous force alone.
 #include <doctest/doctest.h>
@@ -12,47 +13,29 @@
 #include <string>
 #include <vector>
 
-#include "vesph/physics/registry.hpp"
-#include "vesph/sim/system.hpp"
+#include <utility>
+
+#include "hand_built_system.hpp"
 
 using namespace vesph;
 
 namespace {
 
-constexpr double kRho0 = 1000.0;
+using testing::Box;
+using testing::kRho0;
 constexpr double kMu = 2.0;  // Pa s
 
-struct Disk2 {
-  Config cfg;
-  SphSystem<2> sys;
-  double dx;
-  std::vector<double> y, ydot;
-
-  Disk2(const std::string& effects, double dx_, double length, bool periodic)
-      : cfg(Config::fromString("[effects.equation_of_state]\nsound_speed = 10.0\n" + effects, "test")), dx(dx_) {
-    sys.kernel = Kernel(KernelType::quintic, 2, 1.6 * dx);
-    sys.domain.lo = Vec<2>::Constant(periodic ? 0.0 : -length);
-    sys.domain.hi = Vec<2>::Constant(length);
-    for (int a = 0; a < 2; ++a) sys.domain.periodic[a] = periodic;
-  }
-  void add(const Vec<2>& x, const Vec<2>& v) {
-    sys.particles.add(x, v, kRho0, kRho0 * dx * dx, ParticleKind::fluid, sys.particles.size());
-    sys.particles.n_moving = sys.particles.size();
-  }
-  void finish() {
-    ConfigTable root = cfg.root();
-    ConfigTable eff = root.table("effects");
-    sys.effects = makeEffects<2>(eff);
-    cfg.rejectUnknownKeys();
-    sys.setup(dx, kRho0, kMu, 0.1 * sys.kernel.supportRadius());
-    y.assign(sys.size(), 0.0);
-    ydot.assign(sys.size(), 0.0);
-    sys.pack(y.data());
-    sys.evaluate(0.0, y.data(), ydot.data());
-  }
-  std::size_t n() const { return sys.particles.n_moving; }
-  Vec<2> dvdt(std::size_t i) const { return Eigen::Map<const Vec<2>>(ydot.data() + n() * 3 + 2 * i); }
-};
+// A lattice or disk of fluid particles of spacing dx (quintic kernel, h = 1.6 dx) with the
+// viscosity kMu, evaluated once.
+std::unique_ptr<Box<2>> build(const std::string& effects, double dx, double length, bool periodic,
+                              const std::vector<std::pair<Vec<2>, Vec<2>>>& particles) {
+  auto b = std::make_unique<Box<2>>(effects, dx, 1.6, KernelType::quintic, length, periodic);
+  b->viscosity = kMu;
+  for (const auto& [x, v] : particles) b->add(x, v, kRho0, b->mass());
+  b->finish();
+  b->evaluate();
+  return b;
+}
 
 const std::string kLaplacian = "[effects.viscosity]\n";
 const std::string kStress = "[effects.velocity_gradient]\n[effects.viscosity]\nform = \"stress\"\n";
@@ -68,13 +51,14 @@ TEST_CASE("viscosity: both forms give mu lap v of a shear wave inside a periodic
   const double L = 1.0, U = 1e-3, k = 2 * std::numbers::pi / L;
   auto worstError = [&](const std::string& form, int n) {
     const double dx = L / n;
-    Disk2 b(form, dx, L, true);
+    std::vector<std::pair<Vec<2>, Vec<2>>> lattice;
     for (int i = 0; i < n; ++i)
       for (int j = 0; j < n; ++j) {
         const Vec<2> x((i + 0.5) * dx, (j + 0.5) * dx);
-        b.add(x, Vec<2>(U * std::sin(k * x[1]), 0.0));
+        lattice.emplace_back(x, Vec<2>(U * std::sin(k * x[1]), 0.0));
       }
-    b.finish();
+    const auto box = build(form, dx, L, true, lattice);
+    const Box<2>& b = *box;
     const double scale = kMu / kRho0 * k * k * U;
     double worst = 0;
     for (std::size_t i = 0; i < b.n(); ++i) {
@@ -103,25 +87,21 @@ TEST_CASE("viscosity: a rigidly turning disk with a free surface: no force in th
   // round-off; with the standard gradient, whose kernel moments the surface cuts, the two
   // boundary terms cancel only in part (0.37 of the Laplacian's drag, measured).
   const double dx = 0.01, R = 10 * dx, Omega = 0.5;
-  auto build = [&](const std::string& form) {
-    auto b = std::make_unique<Disk2>(form, dx, 2 * R, false);
-    for (int i = -12; i <= 12; ++i)
-      for (int j = -12; j <= 12; ++j) {
-        const Vec<2> x((i + 0.5) * dx, (j + 0.5) * dx);
-        if (x.norm() < R) b->add(x, Vec<2>(-Omega * x[1], Omega * x[0]));
-      }
-    b->finish();
-    return b;
-  };
+  std::vector<std::pair<Vec<2>, Vec<2>>> disk;
+  for (int i = -12; i <= 12; ++i)
+    for (int j = -12; j <= 12; ++j) {
+      const Vec<2> x((i + 0.5) * dx, (j + 0.5) * dx);
+      if (x.norm() < R) disk.emplace_back(x, Vec<2>(-Omega * x[1], Omega * x[0]));
+    }
   const double scale = kMu / kRho0 * Omega * R / (1.6 * dx * 1.6 * dx);  // nu Omega R / h^2
-  auto worst = [&](const Disk2& b) {
+  auto worst = [&](const Box<2>& b) {
     double w = 0;
     for (std::size_t i = 0; i < b.n(); ++i) w = std::max(w, b.dvdt(i).norm());
     return w / scale;
   };
-  const auto laplacian = build(kLaplacian);
-  const auto stress = build(kStress);
-  const auto renormalised = build(kStressRenormalised);
+  const auto laplacian = build(kLaplacian, dx, 2 * R, false, disk);
+  const auto stress = build(kStress, dx, 2 * R, false, disk);
+  const auto renormalised = build(kStressRenormalised, dx, 2 * R, false, disk);
   MESSAGE("largest |dv/dt| / (nu Omega R / h^2): laplacian " << worst(*laplacian) << ", stress " << worst(*stress)
                                                              << ", stress renormalised " << worst(*renormalised));
   CHECK(worst(*laplacian) > 0.05);
@@ -139,10 +119,7 @@ TEST_CASE("viscosity: a rigidly turning disk with a free surface: no force in th
 
 TEST_CASE("viscosity: form keys are checked") {
   auto setupOf = [](const std::string& effects) {
-    Disk2 b(effects, 0.1, 1.0, false);
-    b.add(Vec<2>(0.0, 0.0), Vec<2>::Zero());
-    b.add(Vec<2>(0.1, 0.0), Vec<2>::Zero());
-    b.finish();
+    build(effects, 0.1, 1.0, false, {{Vec<2>(0.0, 0.0), Vec<2>::Zero()}, {Vec<2>(0.1, 0.0), Vec<2>::Zero()}});
   };
   CHECK_THROWS_WITH_AS(setupOf("[effects.viscosity]\nform = \"stress\"\n"),
                        doctest::Contains("needs the velocity gradient: add [effects.velocity_gradient]"), InputError);
