@@ -30,7 +30,7 @@ using namespace vesph;
 
 namespace {
 
-constexpr double kRho0 = 1000.0;
+constexpr double kReferenceDensity = 1000.0;
 
 // A lattice block of n^D cells of width dx from the origin, particles at cell centres.
 // With `frame` > 0 layers, the outer `frame` layers are fixed wall particles and the rest
@@ -51,7 +51,7 @@ Lattice<D> makeLattice(int n, double dx, int frame, KernelType type, double h_ov
   L.domain.lo = Vec<D>::Zero();
   L.domain.hi = Vec<D>::Constant(n * dx);
   for (int a = 0; a < D; ++a) L.domain.periodic[a] = frame == 0;
-  const double m = kRho0 * std::pow(dx, D);
+  const double m = kReferenceDensity * std::pow(dx, D);
   std::size_t total = 1;
   for (int a = 0; a < D; ++a) total *= static_cast<std::size_t>(n);
   for (int pass = 0; pass < 2; ++pass) {  // moving particles, then fixed ones
@@ -66,7 +66,7 @@ Lattice<D> makeLattice(int n, double dx, int frame, KernelType type, double h_ov
         in_frame = in_frame || k < frame || k >= n - frame;
       }
       if (in_frame != (pass == 1)) continue;
-      L.particles.add(x, Vec<D>::Zero(), kRho0, m, in_frame ? ParticleKind::wall : ParticleKind::fluid,
+      L.particles.add(x, Vec<D>::Zero(), kReferenceDensity, m, in_frame ? ParticleKind::wall : ParticleKind::fluid,
                       L.particles.size());
     }
   }
@@ -299,7 +299,7 @@ TEST_CASE("operators: conservation identities on a disordered periodic set") {
   ParticleSet<2>& p = L.particles;
   for (std::size_t i = 0; i < p.size(); ++i) {
     for (int a = 0; a < 2; ++a) p.position[2 * i + a] = L.domain.wrap(a, p.position[2 * i + a] + jitter * u(rng));
-    p.density[i] = kRho0 * (1 + 0.05 * u(rng));
+    p.density[i] = kReferenceDensity * (1 + 0.05 * u(rng));
     p.mass[i] *= 1 + 0.1 * u(rng);
   }
   L.list.update(p, true);

@@ -71,7 +71,7 @@ namespace {
 
 // Krylov subspace of GMRES (no restarts): with the diagonal preconditioner the viscous operator
 // at 20-100x the explicit limit converges in a few iterations.
-constexpr int kKrylovDimension = 20;
+constexpr int kImexKrylovDimension = 20;
 
 // integrator.preconditioner: how GMRES on the stage systems is preconditioned.
 enum class StagePreconditioner { diagonal, amg };
@@ -199,7 +199,7 @@ class ArkodeImex final : public Integrator {
     checkArkode(ARKStepSetLinear(mem_, 0), "SetLinear");
     checkArkode(ARKStepSetDeduceImplicitRhs(mem_, SUNTRUE), "SetDeduceImplicitRhs");
     if (linear_solver_) SUNLinSolFree(linear_solver_);
-    linear_solver_ = SUNLinSol_SPGMR(y_, SUN_PREC_RIGHT, kKrylovDimension, sunctx_);
+    linear_solver_ = SUNLinSol_SPGMR(y_, SUN_PREC_RIGHT, kImexKrylovDimension, sunctx_);
     if (!linear_solver_) throw std::runtime_error("SUNLinSol_SPGMR failed");
     checkArkode(ARKStepSetLinearSolver(mem_, linear_solver_, nullptr), "SetLinearSolver");
     checkArkode(ARKStepSetJacTimes(mem_, nullptr, &ArkodeImex::jtimes), "SetJacTimes");

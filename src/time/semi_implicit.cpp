@@ -41,7 +41,7 @@ namespace {
 // The SDIRK diagonal gamma = 1 - 1/sqrt(2).
 constexpr double kGamma = 0.29289321881345247560;
 // Krylov vectors between GMRES restarts (as arkode-imex's dimension).
-constexpr int kKrylovDimension = 20;
+constexpr int kSemiImplicitKrylovDimension = 20;
 
 class SemiImplicit final : public FixedStepIntegrator {
  public:
@@ -63,7 +63,7 @@ class SemiImplicit final : public FixedStepIntegrator {
     implicit_rate_.assign(n_, 0.0);
     diagonal_.assign(n_, 0.0);
     for (auto* v : {&b_, &k1_, &k2_, &x_, &z_, &w_, &weight_, &inverse_preconditioner_}) v->assign(m_, 0.0);
-    krylov_.assign(static_cast<std::size_t>(kKrylovDimension + 1) * m_, 0.0);
+    krylov_.assign(static_cast<std::size_t>(kSemiImplicitKrylovDimension + 1) * m_, 0.0);
     partial_sums_.assign(static_cast<std::size_t>(omp_get_max_threads()), 0.0);
     diagonal_valid_ = false;
   }
@@ -188,14 +188,14 @@ class SemiImplicit final : public FixedStepIntegrator {
     return s;
   }
 
-  // Restarted GMRES(kKrylovDimension) for (I - gamma_tau J) k = b_ from k = 0, right-
+  // Restarted GMRES(kSemiImplicitKrylovDimension) for (I - gamma_tau J) k = b_ from k = 0, right-
   // preconditioned by inverse_preconditioner_, in the inner product weighted by weight_
   // (Saad 2003, Iterative Methods for Sparse Linear Systems: §6.5, Givens rotations; §9.3,
   // right preconditioning). Stops when the weighted residual is at most linear_rtol_ times the
   // weighted b. Starting from the previous stage's rate instead of zero was measured to cost
   // more products (docs/studies.md §6).
   void gmres(double t, double gamma_tau, std::vector<double>& k) {
-    constexpr int M = kKrylovDimension;
+    constexpr int M = kSemiImplicitKrylovDimension;
     std::fill(k.begin(), k.end(), 0.0);
     double* r = w_.data();
 #pragma omp parallel for schedule(static) if (m_ >= kParallelMinimumValues)
@@ -302,7 +302,7 @@ class SemiImplicit final : public FixedStepIntegrator {
   // Implicit-length (from velocity_begin on): the stage right-hand side f_I(base), the stage
   // rates, GMRES work vectors, the field weights, the Jacobi preconditioner.
   std::vector<double> b_, k1_, k2_, x_, z_, w_, weight_, inverse_preconditioner_;
-  std::vector<double> krylov_;  // (kKrylovDimension + 1) basis vectors of the implicit length
+  std::vector<double> krylov_;  // (kSemiImplicitKrylovDimension + 1) basis vectors of the implicit length
   std::vector<double> partial_sums_;
 };
 

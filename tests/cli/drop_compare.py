@@ -1,5 +1,5 @@
 """An ISPH drop against its WCSPH reference, from the CSVs of tools/drop_measure.py (the ctest
-scripts drop_tensile_contrast.sh and drop_isph_newtonian.sh).
+scripts drop_tensile_contrast.sh and tests/long/drop_isph_newtonian.sh).
 
 Asserts that the ISPH drop is in one fragment in every frame, that its interior summation
 density stays within --max-density of the first frame, that width/D is within --max-width-diff

@@ -1,7 +1,8 @@
 # Incompressible SPH (solver.scheme = "isph", src/isph): the projection after every step.
 #  - transient Poiseuille (cases/poiseuille_newtonian_isph.toml, shortened to t = 0.1125 s)
-#    within the foundation's 2 % of the analytic solution under every integrator (the symplectic
-#    one evaluates its rates again after every projection, which changes the state);
+#    within the foundation's 2 % of the analytic solution under the leapfrog, arkode and the
+#    symplectic integrator (which evaluates its rates again after every projection, which
+#    changes the state); midpoint and arkode-fixed: tests/long/isph_integrators.sh;
 #  - hydrostatic tank (cases/hydrostatic_tank_isph.toml, to t = 0.6 s): pressure within 2 % of
 #    rho g depth below the first three particle layers at every frame, max speed below
 #    1e-3 sqrt(g H) after settling (t >= 0.5 s); with the case's predictor form within 1e-3
@@ -15,18 +16,10 @@
 #  - scene errors: WCSPH effects in an ISPH scene, ISPH keys in a WCSPH scene, iterative keys
 #    with a direct solver exit 2 naming the key.
 . "$(dirname "$0")/lib.sh"
-P=$SRC/cases/poiseuille_newtonian_isph.toml
 T=$SRC/cases/hydrostatic_tank_isph.toml
-PSHORT="--set time.end=0.1125 --set output.times=[0.0225,0.1125]"
 
-for integ in leapfrog midpoint arkode-fixed arkode symplectic; do
-  extra=""
-  [ "$integ" = arkode ] && extra="--set integrator.reference_velocity=2.5e-5"
-  # shellcheck disable=SC2086
-  expect 0 "ok: finished" -- "$VESPH" run "$P" -o "$WORK/p_$integ" --quiet $PSHORT --set "integrator.type=\"$integ\"" $extra
-  $PY "$SRC/tools/poiseuille_check.py" "$WORK/p_$integ/poiseuille_newtonian_isph.h5" >"$WORK/p_$integ.log" 2>&1 && pass ||
-    fail "ISPH Poiseuille under $integ: $(tail -4 "$WORK/p_$integ.log")"
-done
+# leapfrog, arkode and symplectic here; midpoint and arkode-fixed in tests/long/isph_integrators.sh.
+for integ in leapfrog arkode symplectic; do isph_poiseuille "$integ"; done
 $PY - "$WORK/p_symplectic/summary.json" >"$WORK/p_sym.log" 2>&1 <<'PYEOF' && pass || fail "symplectic under ISPH: $(tail -3 "$WORK/p_sym.log")"
 import json, sys
 s = json.load(open(sys.argv[1]))

@@ -65,3 +65,97 @@ open_channel() {
   grep -q '"released": [1-9]' "$WORK/$integ/summary.json" && grep -q '"removed": [1-9]' "$WORK/$integ/summary.json" && pass ||
     fail "$integ: summary.json has no flow counts"
 }
+# drop_integrators "INTEGRATORS": every drop case (cases/drop_newtonian.toml, drop_oldroyd_b.toml,
+# drop_ucm.toml, drop_newtonian_isph.toml, drop_oldroyd_b_isph.toml) under each of the given
+# integrators at its default settings, nothing but integrator.type changed
+# (tests/cli/drop_integrators.sh, tests/long/drop_integrators_fixed_step.sh). A quarter of the
+# resolution (dx = 0.08 cm, D/dx = 25) to t V/D = 2; the Oldroyd-B ISPH drop at half (see
+# drop_integrators.sh). Each run must finish, keep the volume within 1 % and not fracture
+# (tools/drop_measure.py); the integrators must agree on width/D at t V/D = 2 within 0.03.
+drop_integrators() {
+  integrators=$1
+  QUARTER="--set particles.spacing=8e-4 --set domain.min=[-0.06,-0.0024] --set blocks[1].min=[-0.05,-0.0024] --set time.end=0.04 --set output.interval=0.005"
+  HALF="--set particles.spacing=4e-4 --set domain.min=[-0.06,-0.0012] --set blocks[1].min=[-0.05,-0.0012] --set time.end=0.04 --set output.interval=0.005"
+  for c in newtonian oldroyd_b ucm newtonian_isph oldroyd_b_isph; do
+    Q=$QUARTER
+    [ "$c" = oldroyd_b_isph ] && Q=$HALF
+    for integ in $integrators; do
+      # shellcheck disable=SC2086
+      OMP_NUM_THREADS=1 "$VESPH" run "$SRC/cases/drop_$c.toml" -o "$WORK/${c}_$integ" --quiet $Q \
+        --set "integrator.type=\"$integ\"" >"$WORK/${c}_$integ.log" 2>&1 &
+    done
+    wait
+    for integ in $integrators; do
+      r=$WORK/${c}_$integ
+      grep -q '"status": "ok"' "$r/summary.json" 2>/dev/null && pass || fail "$c under $integ did not finish: $(tail -3 "$r.log")"
+      $PY "$SRC/tools/drop_measure.py" "$r/drop_$c.h5" --no-png --no-fracture --max-volume-error 0.01 >"$r/measure.log" 2>&1 && pass ||
+        fail "$c under $integ: $(tail -4 "$r/measure.log")"
+    done
+    # shellcheck disable=SC2086
+    $PY - "$WORK" "$c" $integrators >"$WORK/${c}_agree.log" 2>&1 <<'PYEOF' && pass || fail "$c: integrators disagree: $(tail -5 "$WORK/${c}_agree.log")"
+import csv, sys
+w, c = sys.argv[1], sys.argv[2]
+widths = {}
+for integ in sys.argv[3:]:
+    with open(f"{w}/{c}_{integ}/drop_{c}_drop.csv") as f:
+        rows = list(csv.DictReader(f))
+    last = rows[-1]
+    assert abs(float(last["tV_over_D"]) - 2.0) < 1e-6, last["tV_over_D"]
+    widths[integ] = float(last["width_over_D"])
+print(c, widths)
+spread = max(widths.values()) - min(widths.values())
+assert spread < 0.03, f"width/D at t V/D = 2 differs by {spread:.3f} between integrators"
+PYEOF
+    cat "$WORK/${c}_agree.log"
+  done
+}
+# isph_poiseuille INTEGRATOR: the ISPH Poiseuille start-up (cases/poiseuille_newtonian_isph.toml,
+# shortened to t = 0.1125 s) under that integrator within the foundation's 2 % of the analytic
+# solution (tools/poiseuille_check.py); output in $WORK/p_INTEGRATOR (tests/cli/isph.sh,
+# tests/long/isph_integrators.sh). arkode takes the flow's 2.5e-5 m/s as its velocity scale.
+isph_poiseuille() {
+  integ=$1
+  extra=""
+  [ "$integ" = arkode ] && extra="--set integrator.reference_velocity=2.5e-5"
+  # shellcheck disable=SC2086
+  expect 0 "ok: finished" -- "$VESPH" run "$SRC/cases/poiseuille_newtonian_isph.toml" -o "$WORK/p_$integ" --quiet \
+    --set time.end=0.1125 --set "output.times=[0.0225,0.1125]" --set "integrator.type=\"$integ\"" $extra
+  $PY "$SRC/tools/poiseuille_check.py" "$WORK/p_$integ/poiseuille_newtonian_isph.h5" >"$WORK/p_$integ.log" 2>&1 && pass ||
+    fail "ISPH Poiseuille under $integ: $(tail -4 "$WORK/p_$integ.log")"
+}
+# open_channel_body_force INTEGRATOR: the thesis' feed (cases/channel_open_body_force.toml: a
+# body force inside the channel only, the buffer following the fluid) to t = 0.35 s: the flow
+# rate the body force drives, U = F W^2/(12 nu) = 0.1 m/s, within 3 % (tools/inflow_check.py;
+# tests/cli/inflow_outflow.sh, tests/long/inflow_outflow_integrators.sh).
+open_channel_body_force() {
+  integ=$1
+  expect 0 "ok: finished" -- "$VESPH" run "$SRC/cases/channel_open_body_force.toml" -o "$WORK/bf-$integ" --quiet \
+    --set time.end=0.35 --set "integrator.type=\"$integ\""
+  $PY "$SRC/tools/inflow_check.py" "$WORK/bf-$integ/channel_open_body_force.h5" --profile-x 0.015 --mean-velocity 0.1 \
+    --from 0.25 >"$WORK/bf-$integ.log" 2>&1 && pass || fail "body force, $integ: $(tail -8 "$WORK/bf-$integ.log")"
+}
+# The second-order fluid's channel start-up (cases/startup_channel_second_order_fluid.toml, thesis
+# §4.3.2) shortened to H/20 (tests/cli/second_order_fluid_validation.sh,
+# tests/long/second_order_fluid_forms.sh); word-split on use.
+SOF=$SRC/cases/startup_channel_second_order_fluid.toml
+SOF_H20="--set particles.spacing=5e-4 --set domain.min=[0.0,-2.5e-3] --set domain.max=[1.0e-2,1.25e-2]
+ --set blocks[0].max=[1.0e-2,1.0e-2] --set blocks[1].min=[0.0,-2.5e-3] --set blocks[1].max=[1.0e-2,0.0]
+ --set blocks[2].max=[1.0e-2,1.25e-2] --set time.end=0.007 --set output.interval=0.0005"
+# sof_check NAME SCENE CHECK-ARGS -- run arguments: runs the scene and
+# tools/second_order_channel_check.py with CHECK-ARGS on its output.
+sof_check() {
+  name=$1; scene=$2; args=$3; shift 4
+  # shellcheck disable=SC2086
+  expect 0 "ok: finished" -- "$VESPH" run "$scene" -o "$WORK/$name" --quiet "$@"
+  # shellcheck disable=SC2086
+  $PY "$SRC/tools/second_order_channel_check.py" "$WORK/$name/startup_channel_second_order_fluid.h5" $args \
+    > "$WORK/$name.log" 2>&1 && pass || fail "$name: $(grep -E 'FAIL' "$WORK/$name.log")"
+  echo "$name: $(grep -E 'retardation by|steady N1|RESULT' "$WORK/$name.log" | tr '\n' ' ')"
+}
+# sof_form FORM DERIVATIVE: the H/20 start-up with that form and convected derivative (procedure 3):
+# profile, stresses and the start-up history within 3 % (--transient).
+sof_form() {
+  # shellcheck disable=SC2086
+  sof_check "$1_$2" "$SOF" --transient -- $SOF_H20 --set "effects.second_order_fluid.form=\"$1\"" \
+    --set "effects.second_order_fluid.derivative=\"$2\""
+}
