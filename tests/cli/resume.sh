@@ -88,7 +88,6 @@ PYEOF
 
 # 4b. An effect with between-step state (the second-order fluid's lagged material derivative
 #     keeps the last step's acceleration and velocity: Effect::saveCarried / restoreCarried) is restored too.
-SOF=$SRC/cases/startup_channel_second_order_fluid.toml
 LAG="--set effects.second_order_fluid.material_derivative=lagged --set effects.second_order_fluid.alpha1=-5e-5 --set output.interval=5e-4"
 # shellcheck disable=SC2086
 "$VESPH" run "$SOF" -o "$WORK/sof_full" --quiet $LAG --set time.end=2e-3 >"$WORK/sof.log" 2>&1 || fail "SOF run: $(tail -3 "$WORK/sof.log")"
