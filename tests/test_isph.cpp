@@ -231,6 +231,113 @@ TEST_CASE("isph projection: a tank released without pressure, the projection rem
   CHECK(vmax < 0.05 * g * dt);
 }
 
+TEST_CASE("isph projection: the normal-stress surface pressure is n.T.n on the flagged rows and lifts the interior by it") {
+  // solver.surface_pressure = "normal_stress" (include/vesph/isph/projection.hpp): the flagged
+  // particles take p_s = n.(mu (kappa + kappa^T)).n as their Dirichlet value. The tank of the
+  // cases above, one Euler step from rest, projected twice from the same state: with p = 0 on
+  // the surface, and with the velocity gradient set to the uniform extension
+  // kappa = diag(eps, -eps) (divergence-free), whose normal stress on the level surface
+  // (n = e_y) is -2 mu eps. The pressure equation is linear and the walls are Neumann
+  // boundaries, so the second solution is the first plus a field that is -2 mu eps on the
+  // surface and harmonic inside: -2 mu eps everywhere but near the corners, where the surface
+  // normals tilt.
+  const double mu = 1.0, eps = 100.0;  // Pa s (the case's), 1/s: p_s = -200 Pa against rho g H = 981 Pa
+  const std::string tank = VESPH_SOURCE_DIR "/cases/hydrostatic_tank_isph.toml";
+  auto project = [&](bool normal_stress, std::vector<double>& pressure, std::vector<double>& flagged,
+                     std::vector<double>& expected) {
+    SceneHeader h;
+    std::vector<std::string> set;
+    if (normal_stress) set = {"solver.surface_pressure=\"normal_stress\"", "effects.velocity_gradient.form=\"renormalised\""};
+    Config cfg = loadScene(tank, set, h);
+    Simulation<2> sim(cfg, h);
+    SphSystem<2>& sys = sim.system();
+    auto& proj = dynamic_cast<Projection<2>&>(*sys.hooks[0]);
+    std::vector<double> y = sim.state(), ydot(y.size());
+    proj.start(sys, 0.0, y.data());
+    sys.evaluate(0.0, y.data(), ydot.data());
+    const double dt = 1e-3;
+    for (std::size_t k = 0; k < y.size(); ++k) y[k] += dt * ydot[k];
+    const std::size_t n = sys.particles.n_moving;
+    if (normal_stress) {
+      Field* kappa = sys.particles.fields.find("velocity_gradient");
+      REQUIRE(kappa != nullptr);
+      for (std::size_t i = 0; i < n; ++i) {
+        kappa->data[4 * i + 0] = eps;
+        kappa->data[4 * i + 1] = kappa->data[4 * i + 2] = 0.0;
+        kappa->data[4 * i + 3] = -eps;
+      }
+    }
+    proj.apply(sys, dt, dt, y.data());
+    REQUIRE(proj.lastSolve().ok);
+    const ParticleSet<2>& P = sys.particles;
+    const Field* p = P.fields.find("pressure");
+    const Field* flag = P.fields.find("free_surface");
+    pressure.assign(p->data.begin(), p->data.begin() + static_cast<std::ptrdiff_t>(n));
+    flagged.assign(flag->data.begin(), flag->data.begin() + static_cast<std::ptrdiff_t>(n));
+    expected.assign(n, 0.0);
+    if (normal_stress) {
+      const Field* normal = P.fields.find("surface_normal");
+      REQUIRE(normal != nullptr);
+      for (std::size_t i = 0; i < n; ++i) {
+        const double nx = normal->data[2 * i], ny = normal->data[2 * i + 1];
+        expected[i] = 2.0 * mu * eps * (nx * nx - ny * ny);
+      }
+    }
+    return P.position;
+  };
+  std::vector<double> p0, f0, e0, p1, f1, e1;
+  const std::vector<double> x0 = project(false, p0, f0, e0);
+  const std::vector<double> x1 = project(true, p1, f1, e1);
+  REQUIRE(p0.size() == p1.size());
+  double surface_worst = 0, level = 0;
+  int surface = 0;
+  for (std::size_t i = 0; i < p1.size(); ++i) {
+    REQUIRE(f0[i] == f1[i]);  // the same state, the same flags
+    if (f1[i] < 0.5) continue;
+    ++surface;
+    surface_worst = std::max(surface_worst, std::abs(p1[i] - e1[i]));
+    CHECK(p0[i] == 0.0);
+    level = std::max(level, std::abs(e1[i]));
+  }
+  REQUIRE(surface > 40);           // the top rows of the 40-wide tank
+  CHECK(level > 1.9 * mu * eps);   // the level surface's -2 mu eps is there
+  CHECK(surface_worst <= 1e-12 * level);
+  // Inside, away from the corners (more than 6 dx below the surface and from the side walls):
+  // the difference is the uniform -2 mu eps.
+  const double dx = 2.5e-3, target = -2.0 * mu * eps;
+  double ys = -1e300;
+  for (std::size_t i = 0; i < p1.size(); ++i) ys = std::max(ys, x0[2 * i + 1]);
+  double inner_worst = 0;
+  int inner = 0;
+  for (std::size_t i = 0; i < p1.size(); ++i) {
+    const double x = x0[2 * i], yy = x0[2 * i + 1];
+    if (ys - yy < 6 * dx || x < 6 * dx || x > 0.1 - 6 * dx) continue;
+    ++inner;
+    inner_worst = std::max(inner_worst, std::abs((p1[i] - p0[i]) - target));
+  }
+  MESSAGE("surface rows " << surface << ", worst |p - n.T.n| " << surface_worst << " Pa; interior " << inner
+                          << " particles, worst |dp + 2 mu eps| " << inner_worst << " Pa of " << -target);
+  REQUIRE(inner > 500);
+  CHECK(inner_worst < 0.05 * std::abs(target));
+}
+
+TEST_CASE("isph projection: the normal-stress surface pressure refuses scenes it cannot serve") {
+  const std::string tank = VESPH_SOURCE_DIR "/cases/hydrostatic_tank_isph.toml";
+  auto build = [&](std::vector<std::string> set) {
+    SceneHeader h;
+    Config cfg = loadScene(tank, set, h);
+    Simulation<2> sim(cfg, h);
+  };
+  // No velocity gradient to take the viscous stress from.
+  CHECK_THROWS_AS(build({"solver.surface_pressure=\"normal_stress\""}), InputError);
+  // The incremental form solves for the increment, whose surface value is not n.T.n.
+  CHECK_THROWS_AS(build({"solver.surface_pressure=\"normal_stress\"", "solver.carried_pressure=\"increment\"",
+                         "effects.velocity_gradient.form=\"renormalised\""}),
+                  InputError);
+  CHECK_THROWS_AS(build({"solver.surface_pressure=\"tangential\""}), InputError);
+  CHECK_NOTHROW(build({"solver.surface_pressure=\"normal_stress\"", "effects.velocity_gradient.form=\"renormalised\""}));
+}
+
 TEST_CASE("isph divergence cleaning: the exact projection leaves no discrete divergence and keeps the pressure") {
   // The tank of the previous case, one step from rest, with and without the cleaning.
   auto step = [](bool cleaning, std::vector<double>& y_out, std::vector<double>& p_out, double& before,

@@ -184,7 +184,8 @@ void GradientRows<D>::build(StepContext<D>& sys, GradientForm form, WallPressure
 template <int D>
 void PressureSystem<D>::assemble(StepContext<D>& sys, double dt, LaplacianForm form, const PressureUnknowns& unknowns,
                                  const GradientRows<D>& gradient, const WallConditions<D>& walls,
-                                 const std::vector<double>& divergence, const double* carried, AssembledMatrix& out) {
+                                 const std::vector<double>& divergence, const double* carried, AssembledMatrix& out,
+                                 const double* known) {
   const ParticleSet<D>& P = sys.particles;
   const NeighbourList<D>& list = sys.neighbours;
   const std::size_t n = P.n_moving, rows = unknowns.count;
@@ -238,7 +239,7 @@ void PressureSystem<D>::assemble(StepContext<D>& sys, double dt, LaplacianForm f
       for (std::size_t r = r0; r < r1; ++r) {
         const std::size_t i = static_cast<std::size_t>(particle_of[r]);
         const std::size_t row_begin = rb.cols.size();
-        double constant = 0;  // the wall pressures' hydrostatic parts, moved to the right side
+        double constant = 0;  // the wall pressures' hydrostatic parts and the known pressures, moved to the right side
         double l_old = 0;     // incremental form: the operator applied to the last pressure
         auto column = [&](int u, double value) {
           int& s = rb.slot[static_cast<std::size_t>(u)];
@@ -250,19 +251,27 @@ void PressureSystem<D>::assemble(StepContext<D>& sys, double dt, LaplacianForm f
             rb.vals[static_cast<std::size_t>(s)] += value;
           }
         };
-        // value * p_q, q a fluid particle (an unknown, or p = 0) or a wall particle (p_w
-        // eliminated: sum_f c_wf p_f + b_w).
+        // value * p_q, q a fluid particle (an unknown, or known: p = 0 or the surface's value)
+        // or a wall particle (p_w eliminated: sum_f c_wf p_f + b_w).
         auto add = [&](std::size_t q, double value) {
           if (carried) l_old += value * carried[q];
           if (q < n) {
-            if (unknown_of[q] >= 0) column(unknown_of[q], value);
+            if (unknown_of[q] >= 0)
+              column(unknown_of[q], value);
+            else if (known)
+              constant += value * known[q];
             return;
           }
           constant += value * wall_offset[q - n];
           for (std::size_t kk = list.start[q]; kk < list.split[q]; ++kk) {
             const double c = wall_weight[kk];
-            const int u = unknown_of[list.nbr[kk]];
-            if (c != 0.0 && u >= 0) column(u, value * c);
+            if (c == 0.0) continue;
+            const std::size_t f = list.nbr[kk];
+            const int u = unknown_of[f];
+            if (u >= 0)
+              column(u, value * c);
+            else if (known)
+              constant += value * c * known[f];
           }
         };
         column(static_cast<int>(r), 0.0);  // the diagonal is always stored

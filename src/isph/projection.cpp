@@ -9,6 +9,8 @@
 #include <sstream>
 
 #include "projection_parts.hpp"
+#include "vesph/core/pair_loop.hpp"
+#include "vesph/physics/constitutive.hpp"  // unpackSymmetric
 
 namespace vesph {
 namespace {
@@ -42,6 +44,7 @@ Projection<D>::Projection(ConfigTable& cfg, std::optional<Vec<D>> inflow_directi
     if (!inflow_direction) cfg.fail("inlet_condition", "only with a prescribed [inflow] (the condition is the buffer's)");
     velocity_inlet_ = isph::VelocityInlet<D>{*inflow_direction};
   }
+  surface_stress_.on = cfg.choice("surface_pressure", "zero", {"zero", "normal_stress"}) == "normal_stress";
   if (cfg.has("density_relaxation_time"))
     density_relaxation_time_ = cfg.number("density_relaxation_time", std::nullopt, Bound::positive, "s");
   if (cfg.boolean("divergence_cleaning", false)) {
@@ -96,6 +99,21 @@ void Projection<D>::setup(Setup<D>& s) {
     throw InputError("solver.wall_condition = \"no_penetration\" is not implemented with the incremental form "
                      "(carried_pressure = \"increment\"): the push would be carried on into the next steps; use "
                      "carried_pressure = \"predictor\" (docs/theory.md §10)");
+  if (surface_stress_.on) {
+    if (!free_surface_.effect)
+      throw InputError("solver.surface_pressure = \"normal_stress\" needs [effects.free_surface] (its flags and "
+                       "outward normals)");
+    if (!s.find("velocity_gradient"))
+      throw InputError("solver.surface_pressure = \"normal_stress\" needs the velocity gradient of the viscous "
+                       "stress: add [effects.velocity_gradient]");
+    if (carried_ == CarriedPressure::increment)
+      throw InputError("solver.surface_pressure = \"normal_stress\" is not implemented with the incremental form "
+                       "(carried_pressure = \"increment\", whose Dirichlet value is the increment); use "
+                       "carried_pressure = \"predictor\" or no [effects.pressure_gradient]");
+    surface_stress_.viscosity = s.viscosity;
+    // Requested before the free-surface effect's own setup, which then fills it.
+    surface_stress_.normal = &s.particles.fields.require("surface_normal", D, Field::Range::moving);
+  }
   if (density_relaxation_time_ > 0) {
     if (!free_surface_.effect)
       throw InputError("solver.density_relaxation_time needs [effects.free_surface] (its number density is the "
@@ -124,6 +142,62 @@ void Projection<D>::numberUnknowns(const StepContext<D>& sys) {
 }
 
 template <int D>
+void Projection<D>::surfacePressures(const StepContext<D>& sys) {
+  SurfaceNormalStress& ss = surface_stress_;
+  const ParticleSet<D>& P = sys.particles;
+  const std::size_t n = P.n_moving;
+  if (!ss.velocity_gradient) {
+    ss.velocity_gradient = P.fields.find("velocity_gradient");
+    ss.elastic_stress = P.fields.find("elastic_stress");
+    if (!ss.velocity_gradient) throw std::logic_error("isph projection: no velocity_gradient field");
+  }
+  surface_pressure_.assign(n, 0.0);
+  const double* flag = free_surface_.flag->data.data();
+  const double* normal = ss.normal->data.data();
+  const double* kappa = ss.velocity_gradient->data.data();
+  const double* S = ss.elastic_stress ? ss.elastic_stress->data.data() : nullptr;
+  const std::size_t sc = ss.elastic_stress ? ss.elastic_stress->components : 0;
+  const double mu = ss.viscosity;
+  const double* m = P.mass.data();
+  const double* rho = P.density.data();
+  using Tensor = Eigen::Matrix<double, D, D>;
+  using RowMajor = Eigen::Matrix<double, D, D, Eigen::RowMajor>;
+  // T_j = mu (kappa_j + kappa_j^T) + S_j (n.S.n = n.sym(S).n: a packed symmetric tensor, or the
+  // full D x D tensor of the second-order fluid).
+  auto stress = [&](std::size_t j) {
+    const RowMajor k = Eigen::Map<const RowMajor>(kappa + D * D * j);
+    Tensor T = mu * (k + k.transpose());
+    if (S) T += sc == static_cast<std::size_t>(D * D) ? Tensor(Eigen::Map<const RowMajor>(S + D * D * j))
+                                                      : unpackSymmetric<D>(S + sc * j);
+    return T;
+  };
+  // The surface value from the Shepard average of T over the particle's fluid neighbours (itself
+  // included): the velocity gradient of the outermost rows, whose supports the surface cuts,
+  // is the least accurate, and their own n.T.n alone let surface particles be thrown out of the
+  // die's extrudate (docs/notes/die_swell.md, session 9).
+  const CandidatePairs<D> pairs(P, sys.kernel, sys.domain, sys.neighbours);
+  const NeighbourList<D>& list = sys.neighbours;
+  sys.kernel.visit([&](auto shape) {
+    const double w_self = sys.kernel.w_scale * decltype(shape)::f(0.0);
+#pragma omp parallel for schedule(dynamic, 64) if (n >= kParallelMinimum)
+    for (std::size_t i = 0; i < n; ++i) {
+      if (!(flag[i] > 0.5)) continue;
+      const Eigen::Map<const Vec<D>> nv(normal + D * i);
+      double weight = w_self * m[i] / rho[i];
+      Tensor T = weight * stress(i);
+      pairs.visit(shape, i, list.start[i], list.start[i + 1],
+                  [&](std::size_t, std::size_t j, const Vec<D>&, double W, double) {
+                    if (j >= n) return;
+                    const double w = W * m[j] / rho[j];
+                    T += w * stress(j);
+                    weight += w;
+                  });
+      surface_pressure_[i] = nv.dot((T / weight) * nv);
+    }
+  });
+}
+
+template <int D>
 void Projection<D>::correctPositions(StepContext<D>& sys, double dt, double* y) {
   ParticleSet<D>& P = sys.particles;
   const std::size_t n = P.n_moving;
@@ -141,7 +215,7 @@ void Projection<D>::storePressure(const StepContext<D>& sys) {
   // walls: the extrapolation p_w = sum_f c_wf p_f + b_w (src/isph/wall_conditions.cpp).
   const std::size_t n = sys.particles.n_moving, N = sys.particles.size();
   double* p = pressure_->data.data();
-  for (std::size_t i = 0; i < n; ++i) p[i] = 0.0;
+  for (std::size_t i = 0; i < n; ++i) p[i] = surface_pressure_.empty() ? 0.0 : surface_pressure_[i];
   for (std::size_t r = 0; r < unknowns_->count; ++r) p[unknowns_->particle_of[r]] = solution_[static_cast<Eigen::Index>(r)];
   const NeighbourList<D>& list = sys.neighbours;
   const std::vector<double>& weight = walls_->weights();
@@ -156,6 +230,7 @@ void Projection<D>::storePressure(const StepContext<D>& sys) {
 template <int D>
 void Projection<D>::start(StepContext<D>& sys, double t, double* y) {
   solver_->prepare();
+  surface_pressure_.clear();  // the initial solve: p = 0 on the surface (no velocity gradient yet)
   if (carried_ == CarriedPressure::none) return;
   const auto t0 = Clock::now();
   ParticleSet<D>& P = sys.particles;
@@ -239,8 +314,10 @@ void Projection<D>::apply(StepContext<D>& sys, double t, double dt, double* y) {
   walls_->prepare(sys, dt, increment ? isph::SolvedFor::increment : isph::SolvedFor::pressure, walls_->inlet(),
                   divergence_);
   if (density_relaxation_time_ > 0) relaxDensity(sys, dt);
+  if (surface_stress_.on) surfacePressures(sys);
   system_->assemble(sys, dt, laplacian_, *unknowns_, *gradient_rows_, *walls_, divergence_,
-                    increment ? pressure_->data.data() : nullptr, *pressure_matrix_);
+                    increment ? pressure_->data.data() : nullptr, *pressure_matrix_,
+                    surface_pressure_.empty() ? nullptr : surface_pressure_.data());
   // A closed domain (pinned pressure): the Neumann problem has a solution only when the
   // sources sum to zero; the discrete sources do not quite, and the pin would take the
   // remainder as a point source at one particle. Removing the mean spreads it evenly.
@@ -402,7 +479,8 @@ std::string Projection<D>::describe() const {
                                                          : "symmetric form (thesis 3.18)";
   os << "# ISPH projection after every step: Laplacian " << (laplacian_ == LaplacianForm::consistent ? "consistent (exact for linear fields)" : "thesis eq. (3.37) / Morris")
      << ", linear solver " << solver_->name() << ", pressure gradient " << grad << ";\n#   "
-     << (free_surface_.effect ? "p = 0 on the particles [effects.free_surface] flags"
+     << (free_surface_.effect ? (surface_stress_.on ? "p = n.T.n (the viscous and elastic normal stress) on the particles [effects.free_surface] flags"
+                                                    : "p = 0 on the particles [effects.free_surface] flags")
                            : "no free-surface detection: p = 0 at one pinned fluid particle (closed or periodic domain)")
      << ";\n#   " << (carried_ == CarriedPressure::none ? "plain form (no pressure carried in the right-hand side)"
                       : carried_ == CarriedPressure::predictor ? "carried pressure as the stages' predictor, the whole pressure solved every step"

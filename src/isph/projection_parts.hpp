@@ -146,10 +146,12 @@ class PressureSystem {
   explicit PressureSystem(double rest_density) : rho0_(rest_density) {}
   // The rows of `form` into out.matrix and rhs(): divergence per moving particle; carried:
   // the last pressure whose operator goes to the right-hand side (the incremental form's
-  // L p^n), or nullptr.
+  // L p^n), or nullptr. known: the pressures of the fluid particles that are not unknowns (the
+  // free surface's Dirichlet values, solver.surface_pressure), moved to the right-hand side;
+  // nullptr: p = 0 there.
   void assemble(StepContext<D>& sys, double dt, LaplacianForm form, const PressureUnknowns& unknowns,
                 const GradientRows<D>& gradient, const WallConditions<D>& walls, const std::vector<double>& divergence,
-                const double* carried, AssembledMatrix& out);
+                const double* carried, AssembledMatrix& out, const double* known = nullptr);
   Eigen::VectorXd& rhs() { return rhs_; }
 
  private:

@@ -37,7 +37,8 @@
 //
 // Writes "number_density" (moving particles) and "free_surface" (1 on the surface, 0 inside;
 // all particles, walls 0), which the output stores. When the scene has
-// [effects.surface_pressure], also "surface_normal" (moving particles, D components): the unit
+// [effects.surface_pressure] (or the ISPH projection's solver.surface_pressure =
+// "normal_stress"), also "surface_normal" (moving particles, D components): the unit
 // outward normal n_i = -g_i/|g_i| with g_i = sum_j V_j grad_i W_ij over fluid and wall
 // neighbours (V_j = m_j/rho_j), the direction in which the support is empty; zero where
 // |g_i| < 1e-6/h (a full, symmetric support). Used by the pressure gradient's mirrored
@@ -78,7 +79,9 @@ class FreeSurface final : public Effect<D> {
     density_ = &s.particles.fields.require("number_density", 1, Field::Range::moving);
     flag_ = &s.particles.fields.require("free_surface", 1, Field::Range::all);
     if (near_surface_) outermost_ = &s.particles.fields.require("free_surface_outermost", 1, Field::Range::moving);
-    if (s.find("surface_pressure")) {
+    // The outward normals for [effects.surface_pressure], or for whoever requested the field
+    // before this setup (the ISPH projection's solver.surface_pressure = "normal_stress").
+    if (s.find("surface_pressure") || s.particles.fields.find("surface_normal")) {
       normal_ = &s.particles.fields.require("surface_normal", D, Field::Range::moving);
       normal_floor_ = 1e-6 / s.kernel.h;
     }
@@ -177,7 +180,7 @@ class FreeSurface final : public Effect<D> {
   Field* density_ = nullptr;
   Field* flag_ = nullptr;
   Field* outermost_ = nullptr;
-  Field* normal_ = nullptr;  // only with [effects.surface_pressure]
+  Field* normal_ = nullptr;  // only with [effects.surface_pressure] or ISPH's normal-stress surface
   double normal_floor_ = 0;
 };
 

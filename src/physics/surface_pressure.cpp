@@ -17,7 +17,14 @@
 // The wall particles' pressure is extrapolated from the fluid before this phase (the walls run
 // after the state phase), so walls beside a flagged particle see its equation-of-state value.
 //
-//   value = "normal_stress"  p_s = p_ambient + n.T.n (needs a constitutive model's extra stress)
+//   value = "normal_stress"  p_s = p_ambient + n.T.n: T the field "extra_stress" where a model
+//                            writes it (the second-order fluid); otherwise the viscous stress
+//                            mu (kappa + kappa^T) of [effects.velocity_gradient] plus the
+//                            "elastic_stress" of a rate-type model where there is one (a
+//                            Newtonian fluid, Oldroyd-B, UCM, XPP). The viscous part belongs
+//                            with [effects.viscosity] form = "stress", whose truncated sums at
+//                            the surface leave the traction -tau.n that p_s n then balances
+//                            (docs/theory.md §5.4); Morris' Laplacian leaves mu dv/dn instead.
 //   value = "zero"           p_s = p_ambient (the Newtonian-inviscid approximation of ISPH)
 // n is the free-surface detection's outward normal (field "surface_normal",
 // src/physics/free_surface.cpp); a flagged particle without a normal (a lone particle, a
@@ -56,9 +63,15 @@ class SurfacePressure final : public Effect<D> {
     if (!pressure_ || !flag_ || !normal_) throw std::logic_error("surface_pressure: fields missing after setup");
     if (normal_stress_) {
       extra_ = s.particles.fields.find("extra_stress");
-      if (!extra_)
-        throw InputError(me + ".value = \"normal_stress\" needs the extra stress T of a constitutive model "
-                         "(second_order_fluid, oldroyd_b, ucm, xpp); for a Newtonian fluid set value = \"zero\"");
+      if (!extra_) {
+        kappa_ = s.particles.fields.find("velocity_gradient");
+        if (!kappa_)
+          throw InputError(me + ".value = \"normal_stress\" needs the stress T: the extra stress of the "
+                           "second-order fluid, or the velocity gradient ([effects.velocity_gradient]) for the "
+                           "viscous stress mu (kappa + kappa^T); or set value = \"zero\"");
+        viscosity_ = s.viscosity;
+        elastic_ = s.particles.fields.find("elastic_stress");
+      }
     }
   }
 
@@ -72,7 +85,19 @@ class SurfacePressure final : public Effect<D> {
       double value = ambient_;
       if (normal_stress_) {
         const Eigen::Map<const Vec<D>> n(normal + D * i);
-        value += n.dot(unpackSymmetric<D>(extra_->data.data() + nc * i) * n);
+        if (extra_) {
+          value += n.dot(unpackSymmetric<D>(extra_->data.data() + nc * i) * n);
+        } else {
+          // n.(kappa + kappa^T).n = 2 n.kappa.n; n.S.n = n.sym(S).n for the full tensor too
+          using RowMajor = Eigen::Matrix<double, D, D, Eigen::RowMajor>;
+          value += 2.0 * viscosity_ * n.dot(Eigen::Map<const RowMajor>(kappa_->data.data() + D * D * i) * n);
+          if (elastic_) {
+            const std::size_t c = elastic_->components;
+            value += c == static_cast<std::size_t>(D * D)
+                         ? n.dot(Eigen::Map<const RowMajor>(elastic_->data.data() + c * i) * n)
+                         : n.dot(unpackSymmetric<D>(elastic_->data.data() + c * i) * n);
+          }
+        }
       }
       p[i] = value;
     }
@@ -85,6 +110,11 @@ class SurfacePressure final : public Effect<D> {
   const Field* flag_ = nullptr;
   const Field* normal_ = nullptr;
   const Field* extra_ = nullptr;
+  // Without an extra stress field: the viscous stress from the velocity gradient, plus a
+  // rate-type model's elastic stress where there is one.
+  const Field* kappa_ = nullptr;
+  const Field* elastic_ = nullptr;
+  double viscosity_ = 0;
 };
 
 }  // namespace

@@ -307,6 +307,31 @@ def make_die_swell_convergence_tests(tmp):
                and {k: x for k, x in s.items() if k != "particles"} == {k: x for k, x in ref.items() if k != "particles"},
                f"smoothing ratio: {s['particles']}")
         expect(dsc.variant_suffix({"smoothing_ratio": 1.0}) == "_h1", "smoothing ratio: suffix")
+        # the artificial stress adds its effect and nothing else
+        s = dsc.scene(10, 0.5, {"artificial_stress": 0.2})
+        expect(s["effects"]["artificial_stress"] == {"epsilon": 0.2, "exponent": 4}
+               and {k: x for k, x in s["effects"].items() if k != "artificial_stress"} == ref["effects"]
+               and dsc.variant_suffix({"artificial_stress": 0.2}) == "_as0.2", f"artificial stress: {s['effects']}")
+        # ISPH: the projection's solver table and surface flags from the ISPH case, no equation
+        # of state, continuity or density diffusion; the normal-stress surface adds its key and
+        # the velocity gradient it reads
+        with open(dsc.ISPH_CASE, "rb") as fh:
+            isph_case = tomllib.load(fh)
+        s = dsc.scene(10, 0.5, {"scheme": "isph"})
+        e = s["effects"]
+        expect(s["solver"] == isph_case["solver"] and e["free_surface"] == isph_case["effects"]["free_surface"]
+               and not ({"equation_of_state", "continuity", "density_diffusion"} & set(e))
+               and s["blocks"] == ref["blocks"] and s["particles"] == ref["particles"]
+               and dsc.variant_suffix({"scheme": "isph"}) == "_isph", f"isph: {s}")
+        s = dsc.scene(10, 0.5, {"scheme": "isph", "surface_pressure": "normal_stress", "viscous_form": "stress_renormalised"})
+        expect(s["solver"]["surface_pressure"] == "normal_stress" and s["effects"]["velocity_gradient"] == {"form": "renormalised"}
+               and dsc.variant_suffix({"scheme": "isph", "surface_pressure": "normal_stress"}) == "_isph_nstress",
+               f"isph normal stress: {s}")
+        # WCSPH: the normal-stress surface is [effects.surface_pressure] on the rows flagged at 0.97
+        s = dsc.scene(10, 0.5, {"surface_pressure": "normal_stress", "viscous_form": "stress_renormalised"})
+        expect(s["effects"]["surface_pressure"] == {"value": "normal_stress"}
+               and s["effects"]["free_surface"] == {"threshold": 0.97} and "solver" not in s
+               and "equation_of_state" in s["effects"], f"wcsph normal stress: {s['effects']}")
         expect(dsc.variant_suffix({"wall_floor": None, "xsph": None, "delta": None, "shifting": 0.0,
                                    "sound_speed": None, "integrator": None, "smoothing_ratio": None,
                                    "viscous_form": None}) == "", "no variant: no suffix")

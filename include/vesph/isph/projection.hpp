@@ -5,7 +5,9 @@
 // forces (viscous, body, elastic) over a step dt to the intermediate velocity v*. After the
 // accepted step this hook
 //   1. flags the free surface at the accepted positions ([effects.free_surface], thesis §4.2);
-//   2. solves for the pressure: p = 0 on free-surface particles (Dirichlet), and on the other
+//   2. solves for the pressure: p = 0 on free-surface particles (Dirichlet; with
+//      solver.surface_pressure = "normal_stress" the normal part of the dynamic surface
+//      condition, p_s = n.T.n, below), and on the other
 //      fluid particles the pressure Poisson equation of thesis §3.5,
 //          L p_i = -rho_i div(v*)_i / dt,
 //      L the Laplacian of solver.laplacian (consistent or morris) and div the continuity
@@ -49,6 +51,14 @@
 //      the corrected positions are the thesis' x^{n+1} = x^n + dt (v^n + v^{n+1})/2.
 //   4. (solver.divergence_cleaning) the exact projection of the corrected velocities onto the
 //      discretely divergence-free fields (src/isph/divergence_cleaning.cpp).
+// solver.surface_pressure = "normal_stress": on a free surface without surface tension the
+// traction of the total stress vanishes, (-p I + T).n = 0 (thesis §4.2), whose normal part is
+// p_s = n.T.n: for a viscous fluid 2 mu n.D.n, which near a die's lip, where the surface rows
+// accelerate from the wall's rest (dv_n/dn < 0), is a suction of the order of the die's
+// pressure. p = 0 there (the default, "zero") is the inviscid condition. T = mu (kappa +
+// kappa^T) + S: kappa the velocity gradient of the step's last right-hand side
+// ([effects.velocity_gradient]), S the elastic stress of a viscoelastic model where the scene
+// has one, n the free-surface detection's outward normal (docs/theory.md §10).
 // Without free-surface detection (closed or periodic domains) the pressure is fixed by
 // p = 0 at one fluid particle (the first), which makes the Neumann problem non-singular; the
 // mean of the right-hand side is removed first (solvability of the Neumann problem).
@@ -157,6 +167,9 @@ class Projection final : public StepHook<D> {
   void relaxDensity(StepContext<D>& sys, double dt);
   void correctPositions(StepContext<D>& sys, double dt, double* y);
   void storePressure(const StepContext<D>& sys);
+  // solver.surface_pressure = "normal_stress": p_s = n.T.n of every flagged particle into
+  // surface_pressure_ (0 elsewhere), from the fields bound at the first call.
+  void surfacePressures(const StepContext<D>& sys);
 
   // Configuration: the strategies, read from [solver] at construction; the carried pressure
   // is completed at setup (none without [effects.pressure_gradient]).
@@ -170,6 +183,18 @@ class Projection final : public StepHook<D> {
   // solver.density_relaxation_time (tau, s; 0: off) and the lattice's number density, 1/m^D,
   // against which the free-surface effect's number density at the step's positions is compared.
   double density_relaxation_time_ = 0, lattice_number_density_ = 1;
+
+  // solver.surface_pressure = "normal_stress" (header): the fluid's viscosity mu (Pa s), the
+  // fields it reads and the Dirichlet values per moving particle.
+  struct SurfaceNormalStress {
+    bool on = false;
+    double viscosity = 0;
+    const Field* normal = nullptr;
+    const Field* velocity_gradient = nullptr;
+    const Field* elastic_stress = nullptr;  // null: no viscoelastic model
+  };
+  SurfaceNormalStress surface_stress_;
+  std::vector<double> surface_pressure_;
 
   // Set up.
   FreeSurfaceDetection free_surface_;

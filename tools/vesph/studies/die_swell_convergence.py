@@ -5,8 +5,8 @@ Usage
 -----
     /usr/bin/python3 tools/die_swell_study.py convergence
         [--across N N N ...] [--re RE ...] [--end T] [--interval T] [--stations X ...]
-        [--wall-floor P] [--xsph EPS] [--delta D] [--shifting A] [--sound-speed C]
-        [--integrator TYPE] [--smoothing-ratio R] [--viscous-form FORM] [--jobs J] [--out DIR] [--vesph PATH]
+        [--wall-floor P] [--xsph EPS] [--delta D] [--shifting A] [--artificial-stress EPS] [--sound-speed C]
+        [--integrator TYPE] [--smoothing-ratio R] [--viscous-form FORM] [--scheme wcsph|isph] [--surface-pressure zero|normal_stress] [--jobs J] [--out DIR] [--vesph PATH]
         [--dry-run] [--measure-only] [--no-png] [--compare]
 
 Runs the Newtonian planar die of cases/die_swell_newtonian.toml (W = 0.01 m, exit x = 0.2 m,
@@ -39,12 +39,18 @@ Variants (one thing at a time against the case; each adds a suffix to the study'
 --wall-floor P (pressure_floor on both die walls, Pa; _floorP), --xsph EPS (0 deletes
 [effects.xsph]; _xsphEPS), --delta D (0 deletes [effects.density_diffusion]; _deltaD),
 --shifting A (particle shifting, coefficient A, speed U, with [effects.free_surface] at 0.8;
-_shiftingA), --sound-speed C (m/s, instead of the rule above; _cC), --integrator TYPE
+_shiftingA), --artificial-stress EPS (Monaghan's artificial stress from the pressure, Fang
+eqs. 38-44, exponent 4; _asEPS), --sound-speed C (m/s, instead of the rule above; _cC), --integrator TYPE
 (_TYPE), --smoothing-ratio R (h/dx instead of 1.6, R <= 5/3 so that the five dummy layers
 hold the support 3h; _hR: tells whether a trend follows the kernel's width h or the spacing
 dx), --viscous-form stress | stress_renormalised ([effects.viscosity] form = "stress", the
 stress-free viscous surface of docs/theory.md §5.4, with the velocity gradient of Fang eq. 23 or
-renormalised; _stress, _stress_renormalised). Variants combine: each given one changes the scene.
+renormalised; _stress, _stress_renormalised), --scheme isph (the projection instead of the
+equation of state, with the [solver] table, surface flags and pressure-gradient form of
+cases/die_swell_newtonian_isph.toml; no sound speed, no density diffusion; _isph), with it
+--surface-pressure normal_stress (p = n.T.n on the surface rows flagged at 0.97: ISPH's
+Dirichlet value instead of 0, [solver] surface_pressure; WCSPH's [effects.surface_pressure]
+instead of the equation of state's pressure there; _nstress). Variants combine: each given one changes the scene.
 
 Outputs: OUT/convergence[SUFFIX]/re<Re>_n<N>/ (the scene, the vesph output and log, the
 measure's files), OUT/convergence[SUFFIX]/convergence[SUFFIX].csv (one row per run),
@@ -77,6 +83,7 @@ from vesph import REPO as ROOT, tool_command, tool_environment
 from vesph.studies.die_swell import fmt, g6, run_scene, write_rows  # shared with the thesis studies
 
 CASE = os.path.join(ROOT, "cases", "die_swell_newtonian.toml")
+ISPH_CASE = os.path.join(ROOT, "cases", "die_swell_newtonian_isph.toml")
 RHO, W, U = 1000.0, 0.01, 0.5            # the case's density, die width, feed mean velocity
 DIE_INLET, DIE_EXIT = 0.15, 0.2
 RE_CASE, C_CASE = 0.5, 40.0              # the case's Reynolds number and sound speed
@@ -109,6 +116,8 @@ def variant_suffix(v):
         s += f"_delta{v['delta']:g}"
     if v.get("shifting"):
         s += f"_shifting{v['shifting']:g}"
+    if v.get("artificial_stress"):
+        s += f"_as{v['artificial_stress']:g}"
     if v.get("sound_speed") is not None:
         s += f"_c{v['sound_speed']:g}"
     if v.get("integrator"):
@@ -117,6 +126,10 @@ def variant_suffix(v):
         s += f"_h{v['smoothing_ratio']:g}"
     if v.get("viscous_form") in ("stress", "stress_renormalised"):
         s += "_" + v["viscous_form"]
+    if v.get("scheme") == "isph":
+        s += "_isph"
+    if v.get("surface_pressure") == "normal_stress":
+        s += "_nstress"
     return s
 
 
@@ -157,6 +170,11 @@ def scene(n, re, variant=None, end=None, interval=None):
     if v.get("shifting"):
         e.setdefault("free_surface", {"threshold": 0.8})
         e["particle_shifting"] = {"coefficient": g6(v["shifting"]), "speed": U}
+    if v.get("artificial_stress"):
+        # Monaghan's artificial stress (Fang eqs. 38-44) from the pressure alone (a Newtonian
+        # fluid has no elastic stress): a repulsion between particles in tension, where the
+        # stress-free surface past the lip carries p = 2 mu dv_n/dn < 0.
+        e["artificial_stress"] = {"epsilon": g6(v["artificial_stress"]), "exponent": 4}
     if v.get("integrator"):
         s["integrator"] = {"type": v["integrator"]}
     if v.get("smoothing_ratio") is not None:
@@ -168,6 +186,30 @@ def scene(n, re, variant=None, end=None, interval=None):
         # Fang eq. (23) or renormalised (exact for a linear field at the surface).
         e["viscosity"] = {"form": "stress"}
         e["velocity_gradient"] = ({"form": "renormalised"} if v["viscous_form"] == "stress_renormalised" else {})
+    if v.get("scheme") == "isph":
+        # The repository's ISPH die (cases/die_swell_newtonian_isph.toml) supplies what the
+        # projection needs: no density evolution, equation of state or density diffusion (the
+        # projection holds the volume); p = 0 on the flagged surface rows; its [solver] table
+        # and pressure-gradient form. Everything else (resolution, viscosity, variants) stays.
+        with open(ISPH_CASE, "rb") as fh:
+            isph = tomllib.load(fh)
+        for k in ("continuity", "equation_of_state", "density_diffusion"):
+            e.pop(k, None)
+        e["free_surface"] = copy.deepcopy(isph["effects"]["free_surface"])
+        e["pressure_gradient"] = copy.deepcopy(isph["effects"]["pressure_gradient"])
+        s["solver"] = copy.deepcopy(isph["solver"])
+        if v.get("surface_pressure") == "normal_stress":
+            # p = n.T.n on the flagged rows instead of 0 (the viscous normal stress; needs the
+            # velocity gradient, which the stress form has already)
+            s["solver"]["surface_pressure"] = "normal_stress"
+            e.setdefault("velocity_gradient", {"form": "renormalised"})
+    if v.get("surface_pressure") == "normal_stress" and v.get("scheme") != "isph":
+        # WCSPH: the flagged rows (the ISPH scene's threshold) take p = n.T.n instead of their
+        # equation-of-state pressure ([effects.surface_pressure]; T the viscous stress of the
+        # velocity gradient): the surface balance without the tension the density would need.
+        e.setdefault("free_surface", {})["threshold"] = 0.97
+        e["surface_pressure"] = {"value": "normal_stress"}
+        e.setdefault("velocity_gradient", {"form": "renormalised"})
     if end is not None:
         s["time"]["end"] = g6(end)
     if interval is not None:
@@ -460,6 +502,8 @@ def main(argv=None):
     ap.add_argument("--xsph", type=float, default=None, metavar="EPS")
     ap.add_argument("--delta", type=float, default=None, metavar="D")
     ap.add_argument("--shifting", type=float, default=0.0, metavar="A")
+    ap.add_argument("--artificial-stress", type=float, default=None, metavar="EPS",
+                    help="add [effects.artificial_stress] with epsilon EPS (exponent 4; suffix _asEPS)")
     ap.add_argument("--sound-speed", type=float, default=None, metavar="C")
     ap.add_argument("--integrator", default=None, metavar="TYPE")
     ap.add_argument("--viscous-form", choices=["laplacian", "stress", "stress_renormalised"], default=None,
@@ -469,6 +513,14 @@ def main(argv=None):
     ap.add_argument("--smoothing-ratio", type=float, default=None, metavar="R",
                     help="h/dx instead of the case's 1.6 (the dummy layers stay 5 dx deep: "
                          "R <= 5/3 with the quintic kernel's support 3h)")
+    ap.add_argument("--scheme", choices=["wcsph", "isph"], default="wcsph",
+                    help="pressure treatment (default wcsph; isph: the projection with "
+                         "cases/die_swell_newtonian_isph.toml's [solver] and surface flags, "
+                         "suffix _isph)")
+    ap.add_argument("--surface-pressure", choices=["zero", "normal_stress"], default=None,
+                    help="the pressure of the flagged surface rows (threshold 0.97): ISPH's Dirichlet "
+                         "value [solver] surface_pressure, WCSPH's [effects.surface_pressure] (default: "
+                         "the equation of state's / ISPH p = 0; normal_stress: p = n.T.n, suffix _nstress)")
     ap.add_argument("--jobs", type=int, default=1, metavar="J")
     ap.add_argument("--out", default="out/die_swell_study", metavar="DIR")
     ap.add_argument("--vesph", default=os.path.join(ROOT, "build", "vesph"), metavar="PATH")
@@ -490,18 +542,23 @@ def main(argv=None):
         ap.error("--xsph must lie in [0, 1]")
     if a.delta is not None and a.delta < 0 or a.shifting < 0:
         ap.error("--delta and --shifting must be >= 0")
+    if a.artificial_stress is not None and not (0.0 < a.artificial_stress <= 1.0):
+        ap.error("--artificial-stress must lie in (0, 1]")
     if a.sound_speed is not None and a.sound_speed <= 0:
         ap.error("--sound-speed must be > 0")
     if a.smoothing_ratio is not None and not (0.8 <= a.smoothing_ratio <= 5.0 / 3.0):
         ap.error("--smoothing-ratio must lie in [0.8, 5/3]: the five dummy layers must hold the "
                  "quintic kernel's support 3h")
+    if a.scheme == "isph" and (a.sound_speed is not None or a.delta is not None):
+        ap.error("--scheme isph has no sound speed or density diffusion: drop --sound-speed, --delta")
     if a.wall_floor is not None and not math.isfinite(a.wall_floor):
         ap.error("--wall-floor must be a finite pressure (Pa)")
     if not (a.dry_run or a.measure_only) and not shutil.which(a.vesph) and not os.path.exists(a.vesph):
         ap.error(f"--vesph {a.vesph}: no such executable (build first: see README)")
     variant = {"wall_floor": a.wall_floor, "xsph": a.xsph, "delta": a.delta,
-               "shifting": a.shifting, "sound_speed": a.sound_speed, "integrator": a.integrator,
-               "smoothing_ratio": a.smoothing_ratio, "viscous_form": a.viscous_form}
+               "shifting": a.shifting, "artificial_stress": a.artificial_stress, "sound_speed": a.sound_speed, "integrator": a.integrator,
+               "smoothing_ratio": a.smoothing_ratio, "viscous_form": a.viscous_form,
+               "scheme": a.scheme, "surface_pressure": a.surface_pressure}
     name = "convergence" + variant_suffix(variant)
     sd = os.path.join(a.out, name)
     todo = []
