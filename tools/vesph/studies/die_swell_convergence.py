@@ -46,8 +46,9 @@ hold the support 3h; _hR: tells whether a trend follows the kernel's width h or 
 dx), --viscous-form stress | stress_renormalised ([effects.viscosity] form = "stress", the
 stress-free viscous surface of docs/theory.md §5.4, with the velocity gradient of Fang eq. 23 or
 renormalised; _stress, _stress_renormalised), --scheme isph (the projection instead of the
-equation of state, with the [solver] table, surface flags and pressure-gradient form of
-cases/die_swell_newtonian_isph.toml; no sound speed, no density diffusion; _isph), with it
+equation of state, as cases/die_swell_newtonian_isph_imex.toml has it: the whole pressure each
+step, the symmetric gradient, the density relaxation over 2.9 ms, p = 0 on the rows flagged at
+0.97; no sound speed, no density diffusion; _isph), with it
 --surface-pressure normal_stress (p = n.T.n on the surface rows flagged at 0.97: ISPH's
 Dirichlet value instead of 0, [solver] surface_pressure; WCSPH's [effects.surface_pressure]
 instead of the equation of state's pressure there; _nstress). Variants combine: each given one changes the scene.
@@ -83,7 +84,13 @@ from vesph import REPO as ROOT, tool_command, tool_environment
 from vesph.studies.die_swell import fmt, g6, run_scene, write_rows  # shared with the thesis studies
 
 CASE = os.path.join(ROOT, "cases", "die_swell_newtonian.toml")
-ISPH_CASE = os.path.join(ROOT, "cases", "die_swell_newtonian_isph.toml")
+# --scheme isph: the projection of the ISPH die (cases/die_swell_newtonian_isph_imex.toml, the
+# die's ISPH scene before the normal-stress surface): the whole pressure each step, the symmetric
+# gradient (thesis eq. 3.18) in the correction and the right-hand side, the number-density error
+# relaxed over 2.9 ms, p = 0 on the rows flagged at 0.97.
+ISPH_SOLVER = {"scheme": "isph", "gradient": "symmetric", "carried_pressure": "predictor",
+               "density_relaxation_time": 2.9e-3}
+ISPH_SURFACE_THRESHOLD = 0.97
 RHO, W, U = 1000.0, 0.01, 0.5            # the case's density, die width, feed mean velocity
 DIE_INLET, DIE_EXIT = 0.15, 0.2
 RE_CASE, C_CASE = 0.5, 40.0              # the case's Reynolds number and sound speed
@@ -187,17 +194,15 @@ def scene(n, re, variant=None, end=None, interval=None):
         e["viscosity"] = {"form": "stress"}
         e["velocity_gradient"] = ({"form": "renormalised"} if v["viscous_form"] == "stress_renormalised" else {})
     if v.get("scheme") == "isph":
-        # The repository's ISPH die (cases/die_swell_newtonian_isph.toml) supplies what the
-        # projection needs: no density evolution, equation of state or density diffusion (the
-        # projection holds the volume); p = 0 on the flagged surface rows; its [solver] table
-        # and pressure-gradient form. Everything else (resolution, viscosity, variants) stays.
-        with open(ISPH_CASE, "rb") as fh:
-            isph = tomllib.load(fh)
+        # The projection instead of the equation of state (ISPH_SOLVER above): no density
+        # evolution, equation of state or density diffusion (the projection holds the volume);
+        # the flagged surface rows are its Dirichlet rows. Everything else (resolution,
+        # viscosity, variants) stays.
         for k in ("continuity", "equation_of_state", "density_diffusion"):
             e.pop(k, None)
-        e["free_surface"] = copy.deepcopy(isph["effects"]["free_surface"])
-        e["pressure_gradient"] = copy.deepcopy(isph["effects"]["pressure_gradient"])
-        s["solver"] = copy.deepcopy(isph["solver"])
+        e["free_surface"] = {"threshold": ISPH_SURFACE_THRESHOLD}
+        e["pressure_gradient"] = {"form": "symmetric"}
+        s["solver"] = dict(ISPH_SOLVER)
         if v.get("surface_pressure") == "normal_stress":
             # p = n.T.n on the flagged rows instead of 0 (the viscous normal stress; needs the
             # velocity gradient, which the stress form has already)
@@ -514,9 +519,8 @@ def main(argv=None):
                     help="h/dx instead of the case's 1.6 (the dummy layers stay 5 dx deep: "
                          "R <= 5/3 with the quintic kernel's support 3h)")
     ap.add_argument("--scheme", choices=["wcsph", "isph"], default="wcsph",
-                    help="pressure treatment (default wcsph; isph: the projection with "
-                         "cases/die_swell_newtonian_isph.toml's [solver] and surface flags, "
-                         "suffix _isph)")
+                    help="pressure treatment (default wcsph; isph: the projection of "
+                         "cases/die_swell_newtonian_isph_imex.toml, suffix _isph)")
     ap.add_argument("--surface-pressure", choices=["zero", "normal_stress"], default=None,
                     help="the pressure of the flagged surface rows (threshold 0.97): ISPH's Dirichlet "
                          "value [solver] surface_pressure, WCSPH's [effects.surface_pressure] (default: "
