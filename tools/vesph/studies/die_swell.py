@@ -96,6 +96,12 @@ with the ISPH scene's flags ([effects.free_surface] threshold 0.97, where p = 0 
 ISPH): the two conditions ISPH has at the lip and WCSPH lacks. ISPH runs are left alone (not
 with --scheme isph). Results go under OUT/STUDY_sp (last suffix).
 
+--isph-surface normal_stress gives every ISPH run the stress-free surface of the converged
+Newtonian ISPH die (cases/die_swell_newtonian_isph.toml): [solver] surface_pressure =
+"normal_stress" (p = n.T.n on the flagged rows, T the viscous and elastic stress),
+[effects.viscosity] form = "stress" where the run has the viscous term, and the renormalised
+velocity gradient (docs/theory.md §10). Results go under OUT/STUDY_ns (last suffix).
+
 --dry-run writes the scenes and prints the commands without running them; --measure-only
 tabulates runs already present. --only LABEL restricts a study to the named runs.
 
@@ -217,12 +223,14 @@ def g6(x):
     return float(f"{x:.6g}")
 
 
-def scene_for(run, across, shifting=0.0, room=ROOM, wall_floor=None, surface=False):
+def scene_for(run, across, shifting=0.0, room=ROOM, wall_floor=None, surface=False, isph_surface="zero"):
     """The scene dict of a run: the base case with the run's parameters and resolution; with
     shifting > 0, particle shifting of that coefficient (speed: the feed's mean velocity); the
     domain reaches room die widths above and below the die's centreline; with wall_floor (Pa)
     a WCSPH run's die walls take no pressure below it; with surface, a WCSPH run imposes the
-    free surface's normal stress balance on particles flagged at threshold 0.97."""
+    free surface's normal stress balance on particles flagged at threshold 0.97; with
+    isph_surface = "normal_stress" an ISPH run takes p = n.T.n on its flagged rows, the viscous
+    term in the stress form and the renormalised velocity gradient."""
     with open(BASE_CASE, "rb") as fh:
         s = tomllib.load(fh)
     s = copy.deepcopy(s)
@@ -277,6 +285,15 @@ def scene_for(run, across, shifting=0.0, room=ROOM, wall_floor=None, surface=Fal
         # blows the die up at the exit within 3.5 ms.
         s["solver"] = {"scheme": "isph", "linear_solver": "umfpack", "gradient": "symmetric",
                        "carried_pressure": "predictor", "density_relaxation_time": 3.2e-4}
+        if isph_surface == "normal_stress":
+            # The stress-free surface of the converged Newtonian ISPH die
+            # (cases/die_swell_newtonian_isph.toml; docs/theory.md §10): the flagged rows'
+            # Dirichlet pressure n.T.n (T: mu (kappa + kappa^T) and the elastic stress), which
+            # the symmetric gradient balances against the stress form's surface traction.
+            s["solver"]["surface_pressure"] = "normal_stress"
+            e["velocity_gradient"] = {"form": "renormalised"}
+            if "viscosity" in e:
+                e["viscosity"] = {"form": "stress"}
     if shifting > 0:
         # The surface band of the shifting needs the free-surface flags (theory.md §5.14);
         # ISPH scenes have them already.
@@ -547,6 +564,10 @@ def main(argv=None):
     ap.add_argument("--surface-condition", action="store_true",
                     help="every WCSPH run imposes the free surface's normal stress balance "
                          "([effects.surface_pressure], flags at 0.97; results under OUT/STUDY_sp)")
+    ap.add_argument("--isph-surface", choices=("zero", "normal_stress"), default="zero",
+                    help="the ISPH runs' surface: zero (p = 0, default) or normal_stress (p = n.T.n "
+                         "with the stress form of the viscous term and the renormalised velocity "
+                         "gradient, the converged Newtonian setting; results under OUT/STUDY_ns)")
     ap.add_argument("--jobs", type=int, default=max(1, os.cpu_count() or 1), metavar="J",
                     help="runs at once (each uses one core: set OMP_NUM_THREADS)")
     ap.add_argument("--out", default="out/die_swell_study", metavar="DIR")
@@ -571,6 +592,8 @@ def main(argv=None):
         ap.error("--surface-condition: ISPH runs impose p = 0 on their flagged particles already")
     if a.wall_floor is not None and a.scheme == "isph":
         ap.error("--wall-floor: ISPH runs solve their wall pressures (pressure_floor is WCSPH only)")
+    if a.isph_surface == "normal_stress" and a.scheme != "isph" and a.studies != ["wsph_isph"]:
+        ap.error("--isph-surface applies to ISPH runs: add --scheme isph (or run wsph_isph)")
     if a.scheme == "isph" and "wsph_isph" in a.studies:
         ap.error("--scheme isph: the wsph_isph study already runs both schemes")
     status = 0
@@ -588,7 +611,8 @@ def main(argv=None):
         name = study + ("_isph" if a.scheme == "isph" else "") + ("_shifting" if a.shifting > 0 else "") \
             + (f"_room{a.room:g}" if a.room != ROOM else "") \
             + (f"_floor{a.wall_floor:g}" if a.wall_floor is not None else "") \
-            + ("_sp" if a.surface_condition else "")
+            + ("_sp" if a.surface_condition else "") \
+            + ("_ns" if a.isph_surface == "normal_stress" else "")
         sd = os.path.join(a.out, name)
         todo = []
         for r in runs:
@@ -599,7 +623,7 @@ def main(argv=None):
                     fh.write(f"# die_swell_study.py {name}: {r.label} (De = {r.De:.4g}, "
                              f"Re = {r.Re:.4g}, {a.across} across)\n")
                     fh.write(toml_dumps(scene_for(r, a.across, a.shifting, a.room, a.wall_floor,
-                                                  a.surface_condition)) + "\n")
+                                                  a.surface_condition, a.isph_surface)) + "\n")
             todo.append((r, d))
         if a.dry_run:
             for r, d in todo:
