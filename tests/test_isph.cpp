@@ -34,6 +34,30 @@ SparseRowMatrix convectionDiffusion(int m) {
   return A;
 }
 
+// The ISPH tank (cases/hydrostatic_tank_isph.toml) with the given overrides, its projection
+// started (the hydrostatic initial pressure) and the state advanced from rest by one explicit
+// Euler step of dt with the right-hand side that carries that pressure: the v* a projection
+// test applies the projection to.
+struct TankAfterEulerStep {
+  SceneHeader header;
+  Config config;  // the simulation keeps a reference to it
+  Simulation<2> sim;
+  SphSystem<2>& sys;
+  Projection<2>& projection;
+  std::vector<double> y;
+  TankAfterEulerStep(const std::vector<std::string>& overrides, double dt)
+      : config(loadScene(VESPH_SOURCE_DIR "/cases/hydrostatic_tank_isph.toml", overrides, header)),
+        sim(config, header),
+        sys(sim.system()),
+        projection(dynamic_cast<Projection<2>&>(*sys.hooks[0])),
+        y(sim.state()) {
+    std::vector<double> ydot(y.size());
+    projection.start(sys, 0.0, y.data());
+    sys.evaluate(0.0, y.data(), ydot.data());
+    for (std::size_t k = 0; k < y.size(); ++k) y[k] += dt * ydot[k];
+  }
+};
+
 }  // namespace
 
 TEST_CASE("isph linear solvers: umfpack, klu, bicgstab (diagonal, ilut) solve a non-symmetric system") {
@@ -242,21 +266,15 @@ TEST_CASE("isph projection: the normal-stress surface pressure is n.T.n on the f
   // surface and harmonic inside: -2 mu eps everywhere but near the corners, where the surface
   // normals tilt.
   const double mu = 1.0, eps = 100.0;  // Pa s (the case's), 1/s: p_s = -200 Pa against rho g H = 981 Pa
-  const std::string tank = VESPH_SOURCE_DIR "/cases/hydrostatic_tank_isph.toml";
   auto project = [&](bool normal_stress, std::vector<double>& pressure, std::vector<double>& flagged,
                      std::vector<double>& expected) {
-    SceneHeader h;
     std::vector<std::string> set;
     if (normal_stress) set = {"solver.surface_pressure=\"normal_stress\"", "effects.velocity_gradient.form=\"renormalised\""};
-    Config cfg = loadScene(tank, set, h);
-    Simulation<2> sim(cfg, h);
-    SphSystem<2>& sys = sim.system();
-    auto& proj = dynamic_cast<Projection<2>&>(*sys.hooks[0]);
-    std::vector<double> y = sim.state(), ydot(y.size());
-    proj.start(sys, 0.0, y.data());
-    sys.evaluate(0.0, y.data(), ydot.data());
     const double dt = 1e-3;
-    for (std::size_t k = 0; k < y.size(); ++k) y[k] += dt * ydot[k];
+    TankAfterEulerStep tank(set, dt);
+    SphSystem<2>& sys = tank.sys;
+    Projection<2>& proj = tank.projection;
+    std::vector<double>& y = tank.y;
     const std::size_t n = sys.particles.n_moving;
     if (normal_stress) {
       Field* kappa = sys.particles.fields.find("velocity_gradient");
@@ -342,18 +360,13 @@ TEST_CASE("isph divergence cleaning: the exact projection leaves no discrete div
   // The tank of the previous case, one step from rest, with and without the cleaning.
   auto step = [](bool cleaning, std::vector<double>& y_out, std::vector<double>& p_out, double& before,
                  double& projected, double& after) {
-    SceneHeader h;
     std::vector<std::string> overrides;
     if (cleaning) overrides.push_back("solver.divergence_cleaning=true");
-    Config cfg = loadScene(VESPH_SOURCE_DIR "/cases/hydrostatic_tank_isph.toml", overrides, h);
-    Simulation<2> sim(cfg, h);
-    SphSystem<2>& sys = sim.system();
-    auto& proj = dynamic_cast<Projection<2>&>(*sys.hooks[0]);
-    std::vector<double> y = sim.state(), ydot(y.size());
-    proj.start(sys, 0.0, y.data());
-    sys.evaluate(0.0, y.data(), ydot.data());
     const double dt = 1e-3;
-    for (std::size_t k = 0; k < y.size(); ++k) y[k] += dt * ydot[k];
+    TankAfterEulerStep tank(overrides, dt);
+    SphSystem<2>& sys = tank.sys;
+    Projection<2>& proj = tank.projection;
+    std::vector<double>& y = tank.y;
     proj.apply(sys, dt, dt, y.data());
     REQUIRE(proj.lastSolve().ok);
     if (cleaning) REQUIRE(proj.lastCleaning().ok);
