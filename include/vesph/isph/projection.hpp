@@ -56,7 +56,8 @@
 // p_s = n.T.n: for a viscous fluid 2 mu n.D.n, which near a die's lip, where the surface rows
 // accelerate from the wall's rest (dv_n/dn < 0), is a suction of the order of the die's
 // pressure. p = 0 there (the default, "zero") is the inviscid condition. T = mu (kappa +
-// kappa^T) + S: kappa the velocity gradient of the step's last right-hand side
+// kappa^T) + S, Shepard-averaged over the particle's fluid neighbours (the outermost rows' own
+// kappa is the least accurate): kappa the velocity gradient of the step's last right-hand side
 // ([effects.velocity_gradient]), S the elastic stress of a viscoelastic model where the scene
 // has one, n the free-surface detection's outward normal (docs/theory.md §10).
 // Without free-surface detection (closed or periodic domains) the pressure is fixed by
