@@ -38,7 +38,9 @@ expect 0 "value = 'normal_stress'" -- "$VESPH" check "$OB" --set 'effects.free_s
 
 # bad keys
 expect 2 "effects.surface_pressure needs the free-surface flags and normals: add \[effects.free_surface\]" -- "$VESPH" check "$OB" --set 'effects.surface_pressure={}'
-expect 2 "for a Newtonian fluid set value = \"zero\"" -- "$VESPH" check "$S" --set 'effects.free_surface={}' --set 'effects.surface_pressure={}'
+# a Newtonian fluid's normal stress comes from the velocity gradient: refused without it, accepted with it
+expect 2 "needs the stress T: the extra stress of the second-order fluid, or the velocity gradient" -- "$VESPH" check "$S" --set 'effects.free_surface={}' --set 'effects.surface_pressure={}'
+expect 0 "surface_pressure = \{ ambient_pressure = 0.0, value = 'normal_stress' \}" -- "$VESPH" check "$S" --set 'effects.free_surface={}' --set 'effects.surface_pressure={}' --set 'effects.velocity_gradient={}'
 expect 2 "the ISPH projection imposes its surface pressure itself" -- "$VESPH" check "$SRC/cases/poiseuille_newtonian_isph.toml" --set 'effects.free_surface={}' --set 'effects.surface_pressure={}'
 expect 2 "effects.surface_pressure.value: expected one of: normal_stress, zero" -- "$VESPH" check "$OB" --set 'effects.free_surface={}' --set 'effects.surface_pressure.value="half"'
 expect 2 "effects.artificial_viscosity.alpha: expected a non-negative number, got -1" -- "$VESPH" check "$S" --set effects.artificial_viscosity.alpha=-1
