@@ -156,19 +156,17 @@ void Projection<D>::surfacePressures(const StepContext<D>& sys) {
   const double* normal = ss.normal->data.data();
   const double* kappa = ss.velocity_gradient->data.data();
   const double* S = ss.elastic_stress ? ss.elastic_stress->data.data() : nullptr;
-  const std::size_t sc = ss.elastic_stress ? ss.elastic_stress->components : 0;
+  const bool full = ss.elastic_stress && ss.elastic_stress->components == D * D;
   const double mu = ss.viscosity;
   const double* m = P.mass.data();
   const double* rho = P.density.data();
   using Tensor = Eigen::Matrix<double, D, D>;
-  using RowMajor = Eigen::Matrix<double, D, D, Eigen::RowMajor>;
-  // T_j = mu (kappa_j + kappa_j^T) + S_j (n.S.n = n.sym(S).n: a packed symmetric tensor, or the
-  // full D x D tensor of the second-order fluid).
+  // T_j = mu (kappa_j + kappa_j^T) + S_j (kappa row-major D x D; S packed symmetric, or the
+  // second-order fluid's full tensor, whose n.S.n is that of its symmetric part).
   auto stress = [&](std::size_t j) {
-    const RowMajor k = Eigen::Map<const RowMajor>(kappa + D * D * j);
+    const Tensor k = loadStress<D>(kappa, true, j);
     Tensor T = mu * (k + k.transpose());
-    if (S) T += sc == static_cast<std::size_t>(D * D) ? Tensor(Eigen::Map<const RowMajor>(S + D * D * j))
-                                                      : unpackSymmetric<D>(S + sc * j);
+    if (S) T += loadStress<D>(S, full, j);
     return T;
   };
   // The surface value from the Shepard average of T over the particle's fluid neighbours (itself

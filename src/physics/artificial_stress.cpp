@@ -93,11 +93,7 @@ class ArtificialStress final : public PairEffect<D, ArtificialStress<D>> {
   }
 
  private:
-  Mat<D> load(std::size_t k) const {
-    const double* S = stress_->data.data();
-    if (full_) return Eigen::Map<const Eigen::Matrix<double, D, D, Eigen::RowMajor>>(S + D * D * k);
-    return unpackSymmetric<D>(S + symmetricComponents<D>() * k);
-  }
+  Mat<D> load(std::size_t k) const { return loadStress<D>(stress_->data.data(), full_, k); }
 
   double eps_;
   int n_;

@@ -59,10 +59,7 @@ class StressDivergence final : public PairEffect<D, StressDivergence<D>> {
   }
 
  private:
-  Mat<D> load(const double* S, Index i) const {
-    if (full_) return Eigen::Map<const Eigen::Matrix<double, D, D, Eigen::RowMajor>>(S + D * D * i);
-    return unpackSymmetric<D>(S + symmetricComponents<D>() * i);
-  }
+  Mat<D> load(const double* S, Index i) const { return loadStress<D>(S, full_, i); }
   const Field* stress_ = nullptr;
   bool full_ = false;
   ImplicitPart implicit_ = ImplicitPart::none;

@@ -71,6 +71,7 @@ class SurfacePressure final : public Effect<D> {
                            "viscous stress mu (kappa + kappa^T); or set value = \"zero\"");
         viscosity_ = s.viscosity;
         elastic_ = s.particles.fields.find("elastic_stress");
+        elastic_full_ = elastic_ && elastic_->components == D * D;
       }
     }
   }
@@ -88,15 +89,10 @@ class SurfacePressure final : public Effect<D> {
         if (extra_) {
           value += n.dot(unpackSymmetric<D>(extra_->data.data() + nc * i) * n);
         } else {
-          // n.(kappa + kappa^T).n = 2 n.kappa.n; n.S.n = n.sym(S).n for the full tensor too
-          using RowMajor = Eigen::Matrix<double, D, D, Eigen::RowMajor>;
-          value += 2.0 * viscosity_ * n.dot(Eigen::Map<const RowMajor>(kappa_->data.data() + D * D * i) * n);
-          if (elastic_) {
-            const std::size_t c = elastic_->components;
-            value += c == static_cast<std::size_t>(D * D)
-                         ? n.dot(Eigen::Map<const RowMajor>(elastic_->data.data() + c * i) * n)
-                         : n.dot(unpackSymmetric<D>(elastic_->data.data() + c * i) * n);
-          }
+          // n.(kappa + kappa^T).n = 2 n.kappa.n (kappa row-major, as the full stress); n.S.n =
+          // n.sym(S).n for the second-order fluid's full tensor too
+          value += 2.0 * viscosity_ * n.dot(loadStress<D>(kappa_->data.data(), true, i) * n);
+          if (elastic_) value += n.dot(loadStress<D>(elastic_->data.data(), elastic_full_, i) * n);
         }
       }
       p[i] = value;
@@ -114,6 +110,7 @@ class SurfacePressure final : public Effect<D> {
   // rate-type model's elastic stress where there is one.
   const Field* kappa_ = nullptr;
   const Field* elastic_ = nullptr;
+  bool elastic_full_ = false;  // the second-order fluid's full tensor (else packed symmetric)
   double viscosity_ = 0;
 };
 

@@ -60,6 +60,15 @@ void packSymmetric(const Mat<D>& m, double* s) {
   }
 }
 
+// Particle i's stress from a field of stresses: packed symmetric (the rate-type models' elastic
+// stress, symmetricComponents<D>() per particle) or, with full, the D x D row-major tensor of
+// the second-order fluid.
+template <int D>
+Mat<D> loadStress(const double* S, bool full, std::size_t i) {
+  if (full) return Eigen::Map<const Eigen::Matrix<double, D, D, Eigen::RowMajor>>(S + D * D * i);
+  return unpackSymmetric<D>(S + symmetricComponents<D>() * i);
+}
+
 // Whether a model needs S_zz in planar flow (see above); false unless it says so.
 template <class Model>
 constexpr bool hasOutOfPlaneStress() {

@@ -212,7 +212,7 @@ def scene(n, re, variant=None, end=None, interval=None):
         # WCSPH: the flagged rows (the ISPH scene's threshold) take p = n.T.n instead of their
         # equation-of-state pressure ([effects.surface_pressure]; T the viscous stress of the
         # velocity gradient): the surface balance without the tension the density would need.
-        e.setdefault("free_surface", {})["threshold"] = 0.97
+        e.setdefault("free_surface", {})["threshold"] = ISPH_SURFACE_THRESHOLD
         e["surface_pressure"] = {"value": "normal_stress"}
         e.setdefault("velocity_gradient", {"form": "renormalised"})
     if end is not None:
