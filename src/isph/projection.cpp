@@ -103,7 +103,8 @@ void Projection<D>::setup(Setup<D>& s) {
     if (!free_surface_.effect)
       throw InputError("solver.surface_pressure = \"normal_stress\" needs [effects.free_surface] (its flags and "
                        "outward normals)");
-    if (!s.find("velocity_gradient"))
+    surface_stress_.gradient_effect = s.find("velocity_gradient");
+    if (!surface_stress_.gradient_effect)
       throw InputError("solver.surface_pressure = \"normal_stress\" needs the velocity gradient of the viscous "
                        "stress: add [effects.velocity_gradient]");
     if (carried_ == CarriedPressure::increment)
@@ -111,6 +112,7 @@ void Projection<D>::setup(Setup<D>& s) {
                        "(carried_pressure = \"increment\", whose Dirichlet value is the increment); use "
                        "carried_pressure = \"predictor\" or no [effects.pressure_gradient]");
     surface_stress_.viscosity = s.viscosity;
+    surface_stress_.kinematic_viscosity = s.viscosity / s.rest_density;
     // Requested before the free-surface effect's own setup, which then fills it.
     surface_stress_.normal = &s.particles.fields.require("surface_normal", D, Field::Range::moving);
   }
@@ -142,8 +144,18 @@ void Projection<D>::numberUnknowns(const StepContext<D>& sys) {
 }
 
 template <int D>
-void Projection<D>::surfacePressures(const StepContext<D>& sys) {
+void Projection<D>::surfacePressures(StepContext<D>& sys, double t) {
   SurfaceNormalStress& ss = surface_stress_;
+  // kappa: the field holds the last evaluation's, the one whose viscous traction the step
+  // applied; when that was an implicit-only evaluation (an implicit stage or a Jacobian probe of
+  // an implicit-explicit integrator, at a perturbed velocity: the gradient is shared with the
+  // implicit part when the stress form or a linear stress rate is implicit), kappa of the state
+  // being projected instead.
+  if (sys.lastEvaluationImplicit()) {
+    const RhsContext<D> ctx{sys.particles, sys.kernel, sys.domain, t, nullptr, nullptr, nullptr, nullptr};
+    Effect<D>* e = ss.gradient_effect;
+    sys.driver.run(ctx, sys.neighbours, std::span<Effect<D>* const>(&e, 1));
+  }
   const ParticleSet<D>& P = sys.particles;
   const std::size_t n = P.n_moving;
   if (!ss.velocity_gradient) {
@@ -312,7 +324,7 @@ void Projection<D>::apply(StepContext<D>& sys, double t, double dt, double* y) {
   walls_->prepare(sys, dt, increment ? isph::SolvedFor::increment : isph::SolvedFor::pressure, walls_->inlet(),
                   divergence_);
   if (density_relaxation_time_ > 0) relaxDensity(sys, dt);
-  if (surface_stress_.on) surfacePressures(sys);
+  if (surface_stress_.on) surfacePressures(sys, t);
   system_->assemble(sys, dt, laplacian_, *unknowns_, *gradient_rows_, *walls_, divergence_,
                     increment ? pressure_->data.data() : nullptr, *pressure_matrix_,
                     surface_pressure_.empty() ? nullptr : surface_pressure_.data());

@@ -62,6 +62,7 @@ class SurfacePressure final : public Effect<D> {
     normal_ = s.particles.fields.find("surface_normal");
     if (!pressure_ || !flag_ || !normal_) throw std::logic_error("surface_pressure: fields missing after setup");
     if (normal_stress_) {
+      kinematic_viscosity_ = s.viscosity / s.rest_density;  // T holds the viscous stress either way
       extra_ = s.particles.fields.find("extra_stress");
       if (!extra_) {
         kappa_ = s.particles.fields.find("velocity_gradient");
@@ -74,6 +75,13 @@ class SurfacePressure final : public Effect<D> {
         elastic_full_ = elastic_ && elastic_->components == D * D;
       }
     }
+  }
+
+  // p_s = 2 mu n.kappa.n is a viscous stress applied explicitly through the pressure: its step
+  // limit is the viscous one, also where an implicit-explicit integrator takes [effects.viscosity]
+  // implicitly (docs/theory.md §10 "The normal-stress surface").
+  void stability(StabilityInputs& in) const override {
+    in.kinematic_viscosity = std::max(in.kinematic_viscosity, kinematic_viscosity_);
   }
 
   void particles(const RhsContext<D>&, std::size_t begin, std::size_t end) const override {
@@ -102,6 +110,7 @@ class SurfacePressure final : public Effect<D> {
  private:
   bool normal_stress_ = true;
   double ambient_ = 0;
+  double kinematic_viscosity_ = 0;  // mu/rho0 when p_s carries the viscous stress, else 0
   Field* pressure_ = nullptr;
   const Field* flag_ = nullptr;
   const Field* normal_ = nullptr;

@@ -24,8 +24,9 @@ class VelocityGradient final : public PairEffect<D, VelocityGradient<D>> {
   void setup(Setup<D>& s) override {
     kappa_ = &s.particles.fields.require("velocity_gradient", D * D, Field::Range::moving);
     wall_velocity_ = s.particles.fields.find("wall_velocity");
-    // The implicit part of an Oldroyd-B/UCM rate reads kappa (docs/theory.md §9.5).
-    implicit_ = hasLinearRateModel(*s.effects) ? ImplicitPart::shared : ImplicitPart::none;
+    // The implicit part of an Oldroyd-B/UCM rate (docs/theory.md §9.5) and the stress form of the
+    // viscous force read kappa.
+    implicit_ = implicitPartReadsVelocityGradient(*s.effects) ? ImplicitPart::shared : ImplicitPart::none;
   }
   ImplicitPart implicitPart() const override { return implicit_; }
 

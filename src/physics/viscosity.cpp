@@ -37,7 +37,7 @@ struct Nothing {};
 template <int D>
 struct TransposedStressOf {
   Mat<D> i_over_rho2;    // mu kappa_i^T / rho_i^2
-  const double* kappa;   // the velocity gradients (row-major D x D)
+  const double* kappa;   // the velocity gradients (row-major D x D); null: the term is left out
 };
 
 // The form is a template argument: the Laplacian's pair loop carries nothing of the stress form
@@ -72,10 +72,12 @@ class Viscosity final : public PairEffect<D, Viscosity<D, StressForm>> {
     in.kinematic_viscosity = std::max(in.kinematic_viscosity, nu_);
   }
   // Linear in the velocities (the wall velocities are extrapolated from them): implicit under
-  // arkode-imex, which lifts the viscous step limit (docs/theory.md "Implicit-explicit integration").
-  // The stress form reads kappa, which the gradients phase computes from the stage's velocities
-  // before this pass: it stays explicit (with its viscous step limit).
-  ImplicitPart implicitPart() const override { return StressForm ? ImplicitPart::none : ImplicitPart::all; }
+  // arkode-imex and semi-implicit, which lifts the viscous step limit (docs/theory.md
+  // "Implicit-explicit integration"). The stress form is linear too: its kappa, which the
+  // gradients phase computes from the evaluation's velocities, is then computed in the implicit
+  // evaluations as well (the velocity gradient's ImplicitPart::shared).
+  ImplicitPart implicitPart() const override { return ImplicitPart::all; }
+  bool implicitReadsVelocityGradient() const override { return StressForm; }
 
   // d(dv_i/dt)/dv_j = -w_ij for a fluid neighbour j, and the diagonal sum_j w_ij. A wall
   // neighbour b's velocity is extrapolated from the fluid's, v_b = ... + sum_f c_bf v_f (the
@@ -85,7 +87,10 @@ class Viscosity final : public PairEffect<D, Viscosity<D, StressForm>> {
   // M-matrix, which BoomerAMG needs (with the entries in place, of the opposite sign to the
   // fluid's, its V-cycle let GMRES fail on the die swell; lumped, GMRES takes 2.9 times fewer
   // iterations there than with the Jacobi preconditioner: docs/performance.md).
-  bool couplesVelocities() const override { return !StressForm; }
+  // The stress form adds the Laplacian's rows only: the divergence of mu kappa^T couples second
+  // neighbours and vanishes inside an incompressible flow (mu grad div v), so the preconditioner
+  // leaves it to GMRES.
+  bool couplesVelocities() const override { return true; }
   void velocityCoupling(const RhsContext<D>& ctx, Index i, std::span<const Neighbour<D>> moving,
                         std::span<const Neighbour<D>> fixed, std::span<const double> wall_dependence,
                         VelocityCouplingRow& row) const override {
@@ -122,9 +127,13 @@ class Viscosity final : public PairEffect<D, Viscosity<D, StressForm>> {
     if (ctx.part == RhsPart::implicit_diagonal) {
       // The Jacobian's diagonal d(dv_i/dt)/dv_i = sum_j w_ij (negative: F < 0) is the sum below
       // with v_i = 1 and every v_j = 0 (the wall velocities' dependence on v_i through the
-      // extrapolation left out).
-      return {Vec<D>::Zero(), Vec<D>::Ones(), 2.0 * mu_ / p.density[i], zero_velocity_.data(), p.density.data(),
+      // extrapolation left out; the stress form's kappa^T part left out: its self term,
+      // -sum_j V_j grad W_ij inside kappa_i times sum_j m_j grad W_ij, vanishes where the kernel
+      // is whole).
+      Local l{Vec<D>::Zero(), Vec<D>::Ones(), 2.0 * mu_ / p.density[i], zero_velocity_.data(), p.density.data(),
               p.mass.data(), zero_velocity_.data(), 0, {}};
+      if constexpr (StressForm) l.transposed = {Mat<D>::Zero(), nullptr};
+      return l;
     }
     Local l{Vec<D>::Zero(), p.v(i), 2.0 * mu_ / p.density[i], p.velocity.data(), p.density.data(), p.mass.data(), fv, fixed0, {}};
     if constexpr (StressForm) {
@@ -137,6 +146,7 @@ class Viscosity final : public PairEffect<D, Viscosity<D, StressForm>> {
     const double w = weight(nb, l);
     for (int a = 0; a < D; ++a) l.acc[a] += w * (l.vi[a] - l.v[D * nb.j + a]);
     if constexpr (StressForm) {  // eq. (3.18) on mu kappa^T; grad_i W_ij = F_ij r_ij
+      if (!l.transposed.kappa) return;  // the Jacobian's diagonal: the Laplacian's only
       const double inv_rho = 1.0 / l.rho[nb.j];
       l.acc += (l.m[nb.j] * nb.F) *
                ((l.transposed.i_over_rho2 + transposedStress(l.transposed.kappa, nb.j) * (inv_rho * inv_rho)) * nb.rij);

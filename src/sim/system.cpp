@@ -72,6 +72,10 @@ void SphSystem<D>::setup(double spacing, double rest_density, double viscosity, 
     if (e->pairwise() != pair_phase)
       throw std::logic_error("effect " + std::string(e->name()) + " is in the wrong phase");
   }
+  for (auto& hk : hooks) {
+    hk->stability(stability_inputs_);
+    hk->stability(explicit_stability_inputs_);
+  }
   next_id_ = 0;
   for (std::uint64_t ident : particles.id) next_id_ = std::max(next_id_, ident + 1);
   neighbours.configure(domain, kernel.supportRadius(), skin);
@@ -199,6 +203,7 @@ void SphSystem<D>::evaluateWith(const PhaseLists& lists, RhsPart part, double t,
   // The implicit part has no position rate: dx/dt = v is explicit.
   const double* v = particles.velocity.data();
   const bool implicit = part == RhsPart::implicit_part || part == RhsPart::implicit_diagonal;
+  last_evaluation_implicit_ = implicit;
   const double position_rate = implicit ? 0.0 : 1.0;
 #pragma omp parallel for schedule(static) if (n >= kParallelMinimum)
   for (std::size_t i = 0; i < n; ++i) {

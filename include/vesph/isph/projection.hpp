@@ -121,6 +121,13 @@ class Projection final : public StepHook<D> {
   std::string_view name() const override { return "isph_projection"; }
   void setup(Setup<D>& s) override;
   bool changesState() const override { return true; }
+  // solver.surface_pressure = "normal_stress": p_s = n.T.n carries the viscous stress 2 mu
+  // n.kappa.n, applied explicitly through the Dirichlet rows: its step limit is the viscous one,
+  // also under an implicit-explicit integrator (docs/theory.md §10). Measured on the die at
+  // Re = 0.5, 10 across, arkode-imex: the flux swell 1.179 at the viscous limit, 1.016 at twice it.
+  void stability(StabilityInputs& in) const override {
+    in.kinematic_viscosity = std::max(in.kinematic_viscosity, surface_stress_.kinematic_viscosity);
+  }
   void start(StepContext<D>& sys, double t, double* y) override;
   void apply(StepContext<D>& sys, double t, double dt, double* y) override;
   // The incremental form keeps the last pressure per particle: it follows the particles when
@@ -169,8 +176,10 @@ class Projection final : public StepHook<D> {
   void correctPositions(StepContext<D>& sys, double dt, double* y);
   void storePressure(const StepContext<D>& sys);
   // solver.surface_pressure = "normal_stress": p_s = n.T.n of every flagged particle into
-  // surface_pressure_ (0 elsewhere), from the fields bound at the first call.
-  void surfacePressures(const StepContext<D>& sys);
+  // surface_pressure_ (0 elsewhere), from the fields bound at the first call (the velocity
+  // gradient recomputed at the state being projected, time t, when the last evaluation was of
+  // the implicit part alone).
+  void surfacePressures(StepContext<D>& sys, double t);
 
   // Configuration: the strategies, read from [solver] at construction; the carried pressure
   // is completed at setup (none without [effects.pressure_gradient]).
@@ -190,9 +199,11 @@ class Projection final : public StepHook<D> {
   struct SurfaceNormalStress {
     bool on = false;
     double viscosity = 0;
+    double kinematic_viscosity = 0;  // mu/rho0: the step limit of the explicit p_s (stability)
     const Field* normal = nullptr;
     const Field* velocity_gradient = nullptr;
     const Field* elastic_stress = nullptr;  // null: no viscoelastic model
+    Effect<D>* gradient_effect = nullptr;    // [effects.velocity_gradient], run on the projected state
   };
   SurfaceNormalStress surface_stress_;
   std::vector<double> surface_pressure_;

@@ -78,6 +78,15 @@ bool hasLinearRateModel(const EffectList& effects) {
   return false;
 }
 
+// Whether some effect's implicit part reads the velocity gradient (see
+// Effect::implicitReadsVelocityGradient).
+template <class EffectList>
+bool implicitPartReadsVelocityGradient(const EffectList& effects) {
+  for (const auto* e : effects)
+    if (e->implicitReadsVelocityGradient()) return true;
+  return false;
+}
+
 // The pressure closure of the scheme (WCSPH: the equation of state). Walls use its
 // inverse to give their particles the density that matches the extrapolated pressure.
 struct PressureModel {
@@ -185,6 +194,10 @@ class Effect {
   virtual void stability(StabilityInputs& in) const {}
   // The term an implicit-explicit integrator may treat implicitly (see ImplicitPart).
   virtual ImplicitPart implicitPart() const { return ImplicitPart::none; }
+  // Whether that implicit term reads the velocity gradient (field "velocity_gradient"): the
+  // gradient is then computed in the implicit evaluations too (ImplicitPart::shared). The linear
+  // part of an Oldroyd-B/UCM rate does; so does the stress form of the viscous force.
+  virtual bool implicitReadsVelocityGradient() const { return implicitPart() == ImplicitPart::linear_rate; }
   // An implicit term that couples the velocities of neighbours through one scalar per pair,
   // the same for every component (the viscous force), says so and adds particle i's row of
   // that coupling: the assembled preconditioner of arkode-imex's stage solves

@@ -45,6 +45,10 @@ class StateEvaluator {
   virtual void unpack(const double* y) = 0;
   // The right-hand side at (t, y), not counted as an integrator's evaluation.
   virtual void evaluate(double t, const double* y, double* ydot) = 0;
+  // Whether the last evaluation was of the implicit part alone (an implicit stage or a Jacobian
+  // probe of an implicit-explicit integrator, whose velocities may be perturbed): the fields it
+  // wrote (the velocity gradient) are then not those of an integrated state.
+  virtual bool lastEvaluationImplicit() const = 0;
 
  protected:
   ~StateEvaluator() = default;
@@ -75,6 +79,7 @@ class StepContext {
   std::size_t size() const { return state_.size(); }
   void unpack(const double* y) const { state_.unpack(y); }
   void evaluate(double t, const double* y, double* ydot) const { state_.evaluate(t, y, ydot); }
+  bool lastEvaluationImplicit() const { return state_.lastEvaluationImplicit(); }
   Vec<D> bodyAcceleration() const { return body_acceleration_; }
   // The scene's effect of that name, or nullptr.
   Effect<D>* findEffect(std::string_view name) const {
@@ -105,6 +110,10 @@ class StepHook {
   // Runs before the effects are set up (Setup::find sees every effect of the scene).
   virtual void setup(Setup<D>& s) {}
   virtual bool changesState() const { return false; }
+  // The step limits of the terms the hook applies explicitly (after setup; added to the
+  // explicit part's limits as well as the full right-hand side's: a hook runs between steps,
+  // outside any implicit solve).
+  virtual void stability(StabilityInputs& in) const {}
   // Once before the integration starts, at the initial state (the ISPH projection computes an
   // initial pressure).
   virtual void start(StepContext<D>& system, double t, double* y) {}

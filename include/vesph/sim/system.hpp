@@ -52,6 +52,7 @@ class SphSystem final : public OdeSystem, public StateEvaluator {
   void rhs(double t, const double* y, double* ydot) override;
   // The same evaluation without counting it (derived fields for output, tests, hooks).
   void evaluate(double t, const double* y, double* ydot) override;
+  bool lastEvaluationImplicit() const override { return last_evaluation_implicit_; }
   StabilitySnapshot stability() const override;
   // One part of the right-hand side for implicit-explicit integrators (OdeSystem::rhsPart):
   // the explicit part runs every effect except those whose whole contribution is implicit
@@ -139,6 +140,7 @@ class SphSystem final : public OdeSystem, public StateEvaluator {
   double max_speed_ = 0, max_acceleration_ = 0;
   double explicit_max_acceleration_ = 0;  // of the explicit part, at its last evaluation
   std::uint64_t rhs_evals_ = 0;
+  bool last_evaluation_implicit_ = false;  // see StateEvaluator::lastEvaluationImplicit
   std::uint64_t next_id_ = 0;
   ParticleChanges changes_;
   ParticleRemap remap_;
