@@ -245,6 +245,27 @@ def make_die_swell_convergence_tests(tmp):
         o = dsc.observed_order((10, 16, 25), (1.2, float("nan"), 1.1))
         expect(o["status"] == "undefined", f"a missing value: {o}")
 
+    def re_sweep():
+        # one row per Re from the finest resolution that has a flux swell; the spread over the
+        # resolutions; the Richardson value only where the three finest are monotone
+        nan = float("nan")
+        rows = [{"Re": re, "across": n, "flux": f, "flux_std": 0.01, "envelope": 1.3, "envelope_std": 0.1,
+                 "filled": 1.2, "filled_std": 0.02}
+                for re, n, f in ((0.5, 10, 1.10), (0.5, 13, 1.14), (0.5, 16, 1.16), (2.0, 10, 1.05),
+                                 (2.0, 13, nan), (20.0, 10, 0.93))]
+        rich = dsc.richardson_rows(rows, [0.5, 2.0, 20.0])
+        sweep = dsc.re_sweep_rows(rows, rich)
+        expect([r["Re"] for r in sweep] == [0.5, 2.0, 20.0], f"one row per Re: {sweep}")
+        r05, r2 = sweep[0], sweep[1]
+        expect(r05["across_finest"] == 16 and r05["flux"] == 1.16 and abs(r05["flux_spread"] - 0.06) < 1e-12
+               and r05["flux_status"] == "monotone" and r05["flux_richardson"] > 1.16,
+               f"Re 0.5: {r05}")
+        expect(r2["across_finest"] == 10 and r2["resolutions"] == "10" and math.isnan(r2["flux_richardson"]),
+               f"Re 2: the run without a flux swell is left out: {r2}")
+        png = os.path.join(d, "re_sweep.png")
+        dsc.plot_re_sweep(rows, png, "test")
+        expect(os.path.getsize(png) > 1000, "the Re sweep figure is written")
+
     def scenes():
         with open(dsc.CASE, "rb") as fh:
             base = tomllib.load(fh)
@@ -386,6 +407,7 @@ def make_die_swell_convergence_tests(tmp):
              "ratios, oscillatory, diverging, flagged orders)", richardson),
             ("die_swell_study convergence: scenes (the case at 25 across, Re and c scaling, one change "
              "per variant)", scenes),
+            ("die_swell_study convergence: the swell against Re (one row per Re, its figure)", re_sweep),
             ("die_swell_study convergence: the command line (dry run, bad arguments)", command),
             ("die_swell_study convergence: --measure-only tabulation", tabulation)]
 

@@ -57,7 +57,12 @@ Outputs: OUT/convergence[SUFFIX]/re<Re>_n<N>/ (the scene, the vesph output and l
 measure's files), OUT/convergence[SUFFIX]/convergence[SUFFIX].csv (one row per run),
 ..._richardson.csv (one row per Re and measure), ..._richardson.txt (the verdicts) and
 ..._swell.png (swell against dx/W, the extrapolated values at 0, the finite-element band
-1.186-1.20 of creeping planar flow).
+1.186-1.20 of creeping planar flow). With two or more --re: ..._re_sweep.csv (one row per Re:
+each measure at the finest resolution, the spread of the flux swell over the resolutions, its
+Richardson value where one exists) and ..._re_sweep.png (the flux swell of every resolution
+against Re on a log axis, between the creeping-flow band and the inviscid bound 5/6: a plane
+jet from the parabolic feed keeps its momentum flux 1.2 rho U^2 W, so it contracts to 5/6 W
+when viscosity no longer acts).
 
 --compare runs nothing: it reads every OUT/convergence*/convergence*.csv (the case and each
 variant measured so far; the folders' CSVs hold the runs of their last invocation, so run
@@ -439,6 +444,71 @@ def plot(rows, rich, png, title):
     plt.close(fig)
 
 
+INVISCID_BOUND = 5.0 / 6.0               # plane jet from a parabolic profile: momentum flux 1.2 U^2 W
+
+
+def re_sweep_rows(rows, rich):
+    """One row per Reynolds number: each measure at the finest resolution that has it (mean and
+    std over the steady window), the resolutions measured, and the flux swell's Richardson value
+    where the three finest are monotone (the --re sweep's table, issue 35 item 4)."""
+    out = []
+    for re in sorted({r["Re"] for r in rows}):
+        sel = [r for r in rows if r["Re"] == re and math.isfinite(r.get("flux", math.nan))]
+        if not sel:
+            continue
+        fine = max(sel, key=lambda r: r["across"])
+        o = next((o for o in rich if o["Re"] == re and o["measure"] == "flux"), None) or {}
+        out.append({"Re": re, "across_finest": fine["across"],
+                    "resolutions": " ".join(str(r["across"]) for r in sorted(sel, key=lambda r: r["across"])),
+                    **{q: fine.get(q, math.nan) for q in ("flux", "flux_std", "envelope",
+                                                          "envelope_std", "filled", "filled_std")},
+                    "flux_spread": (max(r["flux"] for r in sel) - min(r["flux"] for r in sel)),
+                    "flux_richardson": o.get("extrapolated", math.nan),
+                    "flux_order": o.get("p", math.nan), "flux_status": o.get("status", "too_few")})
+    return out
+
+
+RE_SWEEP_COLUMNS = ["Re", "across_finest", "resolutions", "flux", "flux_std", "flux_spread", "envelope",
+                    "envelope_std", "filled", "filled_std", "flux_richardson", "flux_order", "flux_status"]
+
+
+def plot_re_sweep(rows, png, title):
+    """Swell against Re (log axis): the flux swell of every resolution, the envelope at the
+    finest, the creeping-flow finite-element band and the inviscid bound 5/6."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    ax.axhspan(*FE_BAND, color="0.85", label="finite elements, creeping flow (1.186-1.20)")
+    ax.axhline(INVISCID_BOUND, color="k", ls="--", lw=0.8,
+               label="inviscid bound 5/6 (momentum flux of the parabolic feed)")
+    ax.axhline(1.0, color="k", lw=0.5)
+    for n in sorted({r["across"] for r in rows}):
+        sel = sorted((r for r in rows if r["across"] == n and math.isfinite(r.get("flux", math.nan))),
+                     key=lambda r: r["Re"])
+        if sel:
+            ax.errorbar([r["Re"] for r in sel], [r["flux"] for r in sel],
+                        yerr=[r["flux_std"] if math.isfinite(r.get("flux_std", math.nan)) else 0.0 for r in sel],
+                        marker="o", capsize=3,
+                        label=f"flux swell, {n} across")
+    fine = max(r["across"] for r in rows)
+    sel = sorted((r for r in rows if r["across"] == fine and math.isfinite(r.get("envelope", math.nan))),
+                 key=lambda r: r["Re"])
+    if sel:
+        ax.plot([r["Re"] for r in sel], [r["envelope"] for r in sel], "s:", color="0.4",
+                label=f"envelope swell, {fine} across")
+    ax.set_xscale("log")
+    ax.set_xlabel("Re = rho W U / mu")
+    ax.set_ylabel("steady swell ratio")
+    ax.set_title(title)
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(png, dpi=120)
+    plt.close(fig)
+
+
 def compare(out, re, png=True):
     """The table and figure of --compare (see the module docstring)."""
     import glob
@@ -631,6 +701,22 @@ def main(argv=None):
         png = os.path.join(sd, name + "_swell.png")
         plot(rows, rich, png, f"die swell, Newtonian: {name}")
         print(f"wrote {png}")
+    sweep = re_sweep_rows(rows, rich)
+    if len(sweep) >= 2:
+        # more than one Re measured: the swell against Re (its table and figure)
+        scsv = os.path.join(sd, name + "_re_sweep.csv")
+        write_rows(scsv, RE_SWEEP_COLUMNS, sweep)
+        print(f"== swell against Re (flux swell at the finest resolution; bounds: creeping "
+              f"{FE_BAND[0]:g}-{FE_BAND[1]:g}, inviscid {INVISCID_BOUND:.4g})")
+        print(f"   {'Re':>6}{'N':>4}{'flux':>9}{'std':>7}{'spread':>8}{'envelope':>10}{'Richardson':>12}")
+        for r in sweep:
+            print(f"   {r['Re']:>6g}{r['across_finest']:>4}{r['flux']:>9.4f}{r['flux_std']:>7.3f}"
+                  f"{r['flux_spread']:>8.3f}{r['envelope']:>10.4f}{fmt(r['flux_richardson']):>12}")
+        print(f"wrote {scsv}")
+        if not a.no_png:
+            png = os.path.join(sd, name + "_re_sweep.png")
+            plot_re_sweep(rows, png, f"die swell against Re, Newtonian: {name}")
+            print(f"wrote {png}")
     return status
 
 
