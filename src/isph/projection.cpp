@@ -133,9 +133,7 @@ template <int D>
 void Projection<D>::flagFreeSurface(StepContext<D>& sys, double t) {
   if (!free_surface_.effect) return;
   if (!free_surface_.flag) free_surface_.flag = sys.particles.fields.find("free_surface");
-  const RhsContext<D> ctx{sys.particles, sys.kernel, sys.domain, t, nullptr, nullptr, nullptr, nullptr};
-  Effect<D>* e = free_surface_.effect;
-  sys.driver.run(ctx, sys.neighbours, std::span<Effect<D>* const>(&e, 1));
+  sys.runEffect(free_surface_.effect, t);
 }
 
 template <int D>
@@ -151,11 +149,7 @@ void Projection<D>::surfacePressures(StepContext<D>& sys, double t) {
   // an implicit-explicit integrator, at a perturbed velocity: the gradient is shared with the
   // implicit part when the stress form or a linear stress rate is implicit), kappa of the state
   // being projected instead.
-  if (sys.lastEvaluationImplicit()) {
-    const RhsContext<D> ctx{sys.particles, sys.kernel, sys.domain, t, nullptr, nullptr, nullptr, nullptr};
-    Effect<D>* e = ss.gradient_effect;
-    sys.driver.run(ctx, sys.neighbours, std::span<Effect<D>* const>(&e, 1));
-  }
+  if (sys.lastEvaluationImplicit()) sys.runEffect(ss.gradient_effect, t);
   const ParticleSet<D>& P = sys.particles;
   const std::size_t n = P.n_moving;
   if (!ss.velocity_gradient) {

@@ -80,6 +80,12 @@ class StepContext {
   void unpack(const double* y) const { state_.unpack(y); }
   void evaluate(double t, const double* y, double* ydot) const { state_.evaluate(t, y, ydot); }
   bool lastEvaluationImplicit() const { return state_.lastEvaluationImplicit(); }
+  // One effect's pass over the particle set as it is, at time t (a hook that needs a field of
+  // the current state: the free-surface flags, the velocity gradient).
+  void runEffect(Effect<D>* effect, double t) const {
+    const RhsContext<D> ctx{particles, kernel, domain, t, nullptr, nullptr, nullptr, nullptr};
+    driver.run(ctx, neighbours, std::span<Effect<D>* const>(&effect, 1));
+  }
   Vec<D> bodyAcceleration() const { return body_acceleration_; }
   // The scene's effect of that name, or nullptr.
   Effect<D>* findEffect(std::string_view name) const {
