@@ -220,6 +220,32 @@ def make_jet_tests(tmp):
         expect(abs(hz - 10.0) < 1.5, f"folding oscillation {hz} Hz", out)
 
     @t
+    def from_time_leaves_out_the_initial_column():
+        # the column bent 0.5 D while it falls (t < t_on), straight after: buckling over the whole
+        # run, none from t_on on (--from); the coiling jet's onset moves to the first frame at or
+        # after --from
+        early = lambda tt: (0.5 * D, 0.0) if tt < t_on - 1e-12 else (0.0, 0.0)  # noqa: E731
+        h5 = write_jet(os.path.join(tmp, "early.h5"), [(tt, jet(2 * D, early(tt))) for tt in times[:21]])
+        rc, out, err = measure(h5, "--out-dir", tmp, "--no-png", "--no-voids", "--expect-no-buckling")
+        expect(rc == 1 and "onset: t = 0 s" in out, f"whole run: exit {rc}", out + err)
+        rc, out, err = measure(h5, "--out-dir", tmp, "--no-png", "--no-voids", "--expect-no-buckling",
+                               "--from", str(t_on))
+        expect(rc == 0 and "RESULT: PASS" in out and "onset: none" in out, f"--from: exit {rc}", out + err)
+        expect("largest buckling indicator 0.000 D" in out and "over the whole run 0.500 D" in out,
+               "the two largest indicators", out)
+        h5 = os.path.join(tmp, "coil.h5")
+        if not os.path.exists(h5):
+            h5 = write_jet(h5, [(tt, jet(2 * D, coil(tt))) for tt in times])
+        rc, out, err = measure(h5, "--out-dir", tmp, "--prefix", "coil_from", "--no-png", "--no-voids",
+                               "--from", "0.1")
+        expect(rc == 0 and "onset: t = 0.1 s" in out, f"coil --from: exit {rc}", out + err)
+        rc, out, err = measure(h5, "--out-dir", tmp, "--prefix", "coil_from", "--no-png", "--no-voids",
+                               "--from", "5")
+        expect(rc == 1 and "no frame at or after --from 5 s" in err, f"--from past the end: exit {rc}", out + err)
+        rc, out, err = measure(h5, "--no-png", "--from", "-1")
+        expect(rc == 2 and "--from must be a time >= 0" in err, f"--from -1: exit {rc}", err)
+
+    @t
     def void_in_the_pile_fails_the_void_check():
         h5 = write_jet(os.path.join(tmp, "hole.h5"), [(0.0, jet(2 * D, (0.0, 0.0), hole=True))])
         rc, out, err = measure(h5, "--out-dir", tmp, "--no-png", "--max-void-gap", "2.5")

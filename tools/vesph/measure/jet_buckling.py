@@ -363,11 +363,16 @@ COLUMNS = [
 def summarise(jet, rows, a):
     """Onset, coiling and oscillation over the run (a dict)."""
     t = np.array([r["time_s"] for r in rows])
-    ind = [r["indicator_D"] for r in rows]
-    k0 = onset(t, ind, a.threshold)
+    ind = np.array([r["indicator_D"] for r in rows])
+    # --from: the frames before it (the initial column's fall) neither buckle nor count
+    first = int(np.searchsorted(t, a.start - 1e-12 * max(1.0, abs(a.start))))
+    k0 = onset(t[first:], ind[first:], a.threshold)
+    if k0 is not None:
+        k0 += first
     s = {"onset_index": k0, "onset_s": float("nan"), "turns": 0.0,
-         "coil_hz": float("nan"), "oscillation_hz": float("nan"),
-         "max_indicator_D": float(np.max(ind)), "max_void_gap_dx": float(np.nanmax(
+         "coil_hz": float("nan"), "oscillation_hz": float("nan"), "first_index": first,
+         "max_indicator_D": float(np.max(ind[first:])) if first < len(t) else float("nan"),
+         "max_indicator_all_D": float(np.max(ind)), "max_void_gap_dx": float(np.nanmax(
              [r["void_gap_dx"] for r in rows])) if not a.no_voids else float("nan"),
          "max_nn_gap_dx": float(np.nanmax([r["max_nn_gap_dx"] for r in rows])),
          "max_isolated": int(max(r["isolated"] for r in rows))}
@@ -502,7 +507,15 @@ def run(a):
               f"{r['indicator_angle_deg']:7.1f} {r['max_nn_gap_dx']:6.2f} {r['isolated']:5d} "
               f"{r['void_gap_dx']:7.2f}")
         U_D = jet.U / jet.D
-        p(f"largest buckling indicator {s['max_indicator_D']:.3f} D (threshold {a.threshold:g} D)")
+        if a.start > 0:
+            if s["first_index"] >= len(rows):
+                raise ToolError(f"{a.h5file}: no frame at or after --from {a.start:g} s "
+                                f"(the last at {rows[-1]['time_s']:.4g} s)")
+            p(f"from t = {a.start:g} s (t U/D = {a.start * jet.U / jet.D:.3g}) on: largest buckling "
+              f"indicator {s['max_indicator_D']:.3f} D (threshold {a.threshold:g} D; over the whole run "
+              f"{s['max_indicator_all_D']:.3f} D)")
+        else:
+            p(f"largest buckling indicator {s['max_indicator_D']:.3f} D (threshold {a.threshold:g} D)")
         if s["onset_index"] is None:
             p("onset: none (no frame buckles)")
         else:
@@ -561,6 +574,10 @@ def main(argv=None):
     ap.add_argument("--pictures", type=times_list, metavar="T1,T2,...",
                     help="side views at the frames nearest to these times [s] (default: four "
                          "frames spread over the run)")
+    ap.add_argument("--from", dest="start", type=float, default=0.0, metavar="T",
+                    help="the onset, the largest indicator and the buckling checks count the "
+                         "frames from time T [s] on (default 0: all); e.g. the transit time of "
+                         "an initial column, about H/U")
     ap.add_argument("--no-voids", action="store_true", help="skip the void gap (grid measure)")
     g = ap.add_mutually_exclusive_group()
     g.add_argument("--expect-buckling", action="store_true", help="check: some frame buckles")
@@ -568,6 +585,8 @@ def main(argv=None):
     ap.add_argument("--max-void-gap", type=float, metavar="G",
                     help="check: every frame's void gap is at most G dx (e.g. 2.5)")
     a = ap.parse_args(argv)
+    if not (math.isfinite(a.start) and a.start >= 0):
+        ap.error(f"--from must be a time >= 0 [s], got {a.start:g}")
     for nm, v in (("--threshold", a.threshold), ("--pile-factor", a.pile_factor), ("--band", a.band),
                   ("--trace", a.trace)):
         if not (math.isfinite(v) and v > 0):
