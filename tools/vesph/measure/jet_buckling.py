@@ -366,12 +366,15 @@ def summarise(jet, rows, a):
     ind = np.array([r["indicator_D"] for r in rows])
     # --from: the frames before it (the initial column's fall) neither buckle nor count
     first = int(np.searchsorted(t, a.start - 1e-12 * max(1.0, abs(a.start))))
+    if first >= len(t):
+        raise ToolError(f"{a.h5file}: no frame at or after --from {a.start:g} s "
+                        f"(the last at {t[-1]:.4g} s)")
     k0 = onset(t[first:], ind[first:], a.threshold)
     if k0 is not None:
         k0 += first
     s = {"onset_index": k0, "onset_s": float("nan"), "turns": 0.0,
-         "coil_hz": float("nan"), "oscillation_hz": float("nan"), "first_index": first,
-         "max_indicator_D": float(np.max(ind[first:])) if first < len(t) else float("nan"),
+         "coil_hz": float("nan"), "oscillation_hz": float("nan"),
+         "max_indicator_D": float(np.max(ind[first:])),
          "max_indicator_all_D": float(np.max(ind)), "max_void_gap_dx": float(np.nanmax(
              [r["void_gap_dx"] for r in rows])) if not a.no_voids else float("nan"),
          "max_nn_gap_dx": float(np.nanmax([r["max_nn_gap_dx"] for r in rows])),
@@ -508,9 +511,6 @@ def run(a):
               f"{r['void_gap_dx']:7.2f}")
         U_D = jet.U / jet.D
         if a.start > 0:
-            if s["first_index"] >= len(rows):
-                raise ToolError(f"{a.h5file}: no frame at or after --from {a.start:g} s "
-                                f"(the last at {rows[-1]['time_s']:.4g} s)")
             p(f"from t = {a.start:g} s (t U/D = {a.start * jet.U / jet.D:.3g}) on: largest buckling "
               f"indicator {s['max_indicator_D']:.3f} D (threshold {a.threshold:g} D; over the whole run "
               f"{s['max_indicator_all_D']:.3f} D)")
