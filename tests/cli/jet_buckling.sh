@@ -10,9 +10,9 @@
 #     sheets the folding jet lays on the pile enclose gaps of up to 3.5 dx (at the case's 8 dx
 #     3.4 dx; docs/validation.md §19, not met): printed, not asserted.
 # The no-buckling side (H/D = 4, Re = 10) is in validation.md §19, not here (a minute each).
-# About 100 s of CPU time single-threaded (the run and the measure's void grid). The viscous step coefficient stays at the default
-# 0.125 here (the D = 4 dx jets run to 0.3 s with it; the case takes 0.0625, which the D = 8 dx
-# jet needed with the Laplacian), half the cost.
+# About 100 s of CPU time single-threaded (the run and the measure's void grid). The viscous
+# step coefficient stays at the default 0.125 here (the D = 4 dx jets run to 0.3 s with it; the
+# case takes 0.0625, which the D = 8 dx jet needed with the Laplacian), half the cost.
 . "$(dirname "$0")/lib.sh"
 CASE=$SRC/cases/jet_buckling_newtonian.toml
 expect 0 "ok: finished" -- "$VESPH" run "$CASE" -o "$WORK/run" --quiet --set time.end=0.3 --set output.interval=0.01 \
