@@ -25,8 +25,10 @@
 // up to the symmetric divergence of tau exactly). Morris' part keeps its damping of the
 // particle-scale velocity noise, which a divergence of kappa alone does not see (the nested
 // first derivatives' zero-energy modes: with tau = mu (kappa + kappa^T) in eq. 3.18 alone the
-// die's extrudate fell apart, measured). Wall particles enter Morris' part only, with their
-// no-slip velocity (the wall friction).
+// die's extrudate fell apart, measured). Wall particles enter Morris' part with their no-slip
+// velocity (the wall friction) and the kappa^T part with the fluid particle's own mu kappa_i^T (a
+// constant continuation into the wall): left out of that sum, a wall would act on it as a free
+// surface and put mu kappa^T.n on the rows beside it, a drag beside a turning rod (theory §5.4).
 #include "vesph/physics/constitutive.hpp"  // Mat<D>
 #include "vesph/physics/registry.hpp"
 
@@ -37,6 +39,7 @@ struct Nothing {};
 template <int D>
 struct TransposedStressOf {
   Mat<D> i_over_rho2;    // mu kappa_i^T / rho_i^2
+  Mat<D> i;              // mu kappa_i^T: a wall neighbour's value (constant continuation)
   const double* kappa;   // the velocity gradients (row-major D x D); null: the term is left out
 };
 
@@ -132,13 +135,14 @@ class Viscosity final : public PairEffect<D, Viscosity<D, StressForm>> {
       // is whole).
       Local l{Vec<D>::Zero(), Vec<D>::Ones(), 2.0 * mu_ / p.density[i], zero_velocity_.data(), p.density.data(),
               p.mass.data(), zero_velocity_.data(), 0, {}};
-      if constexpr (StressForm) l.transposed = {Mat<D>::Zero(), nullptr};
+      if constexpr (StressForm) l.transposed = {Mat<D>::Zero(), Mat<D>::Zero(), nullptr};
       return l;
     }
     Local l{Vec<D>::Zero(), p.v(i), 2.0 * mu_ / p.density[i], p.velocity.data(), p.density.data(), p.mass.data(), fv, fixed0, {}};
     if constexpr (StressForm) {
       const double rho = p.density[i];
-      l.transposed = {transposedStress(kappa_->data.data(), i) / (rho * rho), kappa_->data.data()};
+      const Mat<D> Ti = transposedStress(kappa_->data.data(), i);
+      l.transposed = {Ti / (rho * rho), Ti, kappa_->data.data()};
     }
     return l;
   }
@@ -155,6 +159,11 @@ class Viscosity final : public PairEffect<D, Viscosity<D, StressForm>> {
   void pairFixed(const RhsContext<D>&, Index, const Neighbour<D>& nb, Local& l) const {
     const double w = weight(nb, l);
     for (int a = 0; a < D; ++a) l.acc[a] += w * (l.vi[a] - l.fixed_velocity[D * (nb.j - l.fixed0) + a]);
+    if constexpr (StressForm) {  // eq. (3.18) with the wall's mu kappa^T continued as mu kappa_i^T
+      if (!l.transposed.kappa) return;
+      const double inv_rho = 1.0 / l.rho[nb.j];
+      l.acc += (l.m[nb.j] * nb.F) * ((l.transposed.i_over_rho2 + l.transposed.i * (inv_rho * inv_rho)) * nb.rij);
+    }
   }
   void end(const RhsContext<D>& ctx, Index i, Local& l) const {
     for (int a = 0; a < D; ++a) ctx.dvdt[D * i + a] += l.acc[a];
