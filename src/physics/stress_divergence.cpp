@@ -7,6 +7,12 @@
 // "elastic_stress": symmetric (3 components in 2D, 6 in 3D: the rate-type models) or a full
 // row-major D x D tensor (the second-order fluid, whose mixed convected derivative is not
 // symmetric); the divergence is taken over the second index, (div S)^a = dS^{ab}/dx^b.
+// wall_stress = "continued": a wall neighbour enters with the fluid particle's own S_i in place
+// of its extrapolated S_j (a constant continuation of each particle's stress into the wall, as
+// the stress form of the viscous force does with mu kappa^T). Fang's eq. 46 average over a wall
+// particle's fluid neighbours turns through large angles of azimuth beside a thin rod (a radius
+// of a few spacings); the continuation does not depend on the wall's shape (docs/theory.md §5.6,
+// measured in docs/validation.md §20).
 #include "vesph/physics/constitutive.hpp"
 #include "vesph/physics/registry.hpp"
 
@@ -16,7 +22,8 @@ namespace {
 template <int D>
 class StressDivergence final : public PairEffect<D, StressDivergence<D>> {
  public:
-  explicit StressDivergence(ConfigTable&) {}
+  explicit StressDivergence(ConfigTable& cfg)
+      : continued_(cfg.choice("wall_stress", "extrapolated", {"extrapolated", "continued"}) == "continued") {}
   std::string_view name() const override { return "stress_divergence"; }
   Phase phase() const override { return Phase::forces; }
 
@@ -37,6 +44,7 @@ class StressDivergence final : public PairEffect<D, StressDivergence<D>> {
 
   struct Local {
     Vec<D> acc;
+    Mat<D> Si;
     Mat<D> Si_over_rho2;
     const double* S;
     const double* rho;
@@ -45,13 +53,18 @@ class StressDivergence final : public PairEffect<D, StressDivergence<D>> {
   Local begin(const RhsContext<D>& ctx, Index i) const {
     const ParticleSet<D>& p = ctx.particles;
     const double rho = p.density[i];
-    return {Vec<D>::Zero(), load(stress_->data.data(), i) / (rho * rho), stress_->data.data(), p.density.data(),
-            p.mass.data()};
+    const Mat<D> Si = load(stress_->data.data(), i);
+    return {Vec<D>::Zero(), Si, Si / (rho * rho), stress_->data.data(), p.density.data(), p.mass.data()};
   }
   void pair(const RhsContext<D>&, Index, const Neighbour<D>& nb, Local& l) const {
     const double inv_rho = 1.0 / l.rho[nb.j];
     const Mat<D> Sj = load(l.S, nb.j);
     l.acc += (l.m[nb.j] * nb.F) * ((l.Si_over_rho2 + Sj * (inv_rho * inv_rho)) * nb.rij);
+  }
+  void pairFixed(const RhsContext<D>& ctx, Index i, const Neighbour<D>& nb, Local& l) const {
+    if (!continued_) return pair(ctx, i, nb, l);
+    const double inv_rho = 1.0 / l.rho[nb.j];
+    l.acc += (l.m[nb.j] * nb.F) * ((l.Si_over_rho2 + l.Si * (inv_rho * inv_rho)) * nb.rij);
   }
   void end(const RhsContext<D>& ctx, Index i, Local& l) const {
     if (ctx.part == RhsPart::implicit_diagonal) return;  // it depends on the stress, not on v_i
@@ -61,6 +74,7 @@ class StressDivergence final : public PairEffect<D, StressDivergence<D>> {
  private:
   Mat<D> load(const double* S, Index i) const { return loadStress<D>(S, full_, i); }
   const Field* stress_ = nullptr;
+  bool continued_ = false;  // wall_stress = "continued"
   bool full_ = false;
   ImplicitPart implicit_ = ImplicitPart::none;
 };
