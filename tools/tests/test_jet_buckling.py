@@ -204,6 +204,7 @@ def make_jet_tests(tmp):
                        [(tt, jet(2 * D, (coil(tt)[0], -coil(tt)[1]))) for tt in times])
         rc, out, err = measure(h5, "--out-dir", tmp, "--no-png", "--no-voids")
         expect(rc == 0 and "coiling: -1.50 turns" in out and "frequency 10 Hz" in out, "backwards", out + err)
+        expect("largest void gap not measured (--no-voids)" in out, "--no-voids says the gap is not measured", out)
 
     @t
     def folding_jet_oscillates_without_turning():

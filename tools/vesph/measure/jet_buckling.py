@@ -524,7 +524,8 @@ def run(a):
               f"{fmt(s['coil_hz'])} Hz (f D/U = {fmt(s['coil_hz'] / U_D)})")
             p(f"oscillation of the indicator's offset after the onset: {fmt(s['oscillation_hz'])} Hz "
               f"(f D/U = {fmt(s['oscillation_hz'] / U_D)})")
-        p(f"voids: largest void gap {fmt(s['max_void_gap_dx'])} dx, largest nearest-neighbour "
+        void_gap = "not measured (--no-voids)" if a.no_voids else f"{fmt(s['max_void_gap_dx'])} dx"
+        p(f"voids: largest void gap {void_gap}, largest nearest-neighbour "
           f"gap {fmt(s['max_nn_gap_dx'])} dx, at most {s['max_isolated']} isolated particles")
         for w in written:
             p(f"wrote {w}")
