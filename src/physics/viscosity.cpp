@@ -13,7 +13,7 @@
 //
 // form = "stress" (docs/theory.md §5.4 "The viscous free surface"): the divergence of the full
 // viscous stress, div(mu (grad v + grad v^T)) = mu lap v + div(mu grad v^T), with the first part
-// in Morris' form above and the second between fluid particles by the symmetric divergence of
+// in Morris' form above and the second by the symmetric divergence of
 // thesis eq. (3.18) on mu kappa^T (kappa the velocity gradient of Fang eq. 23):
 //   dv_i/dt += sum_j m_j (mu kappa_i^T/rho_i^2 + mu kappa_j^T/rho_j^2) grad_i W_ij.
 // Inside the fluid the second part is mu grad(div v), which vanishes for an incompressible
@@ -26,9 +26,13 @@
 // particle-scale velocity noise, which a divergence of kappa alone does not see (the nested
 // first derivatives' zero-energy modes: with tau = mu (kappa + kappa^T) in eq. 3.18 alone the
 // die's extrudate fell apart, measured). Wall particles enter Morris' part with their no-slip
-// velocity (the wall friction) and the kappa^T part with the fluid particle's own mu kappa_i^T (a
-// constant continuation into the wall): left out of that sum, a wall would act on it as a free
-// surface and put mu kappa^T.n on the rows beside it, a drag beside a turning rod (theory §5.4).
+// velocity (the wall friction). In the kappa^T part they are left out by default
+// (wall_stress = "omitted"), so a wall acts on that sum as a free surface and puts mu kappa^T.n
+// on the rows beside it: zero at a flat wall with the flow along it, a drag beside a turning rod.
+// wall_stress = "continued" lets them enter with the fluid particle's own mu kappa_i^T (a
+// constant continuation into the wall), which removes that term where the walls fill the kernel
+// but, at a die's lip (wall, free surface and the lip's large kappa in one kernel), peels the
+// extrudate's surface rows off (theory §5.4, measured).
 #include "vesph/physics/constitutive.hpp"  // Mat<D>
 #include "vesph/physics/registry.hpp"
 
@@ -48,7 +52,14 @@ struct TransposedStressOf {
 template <int D, bool StressForm>
 class Viscosity final : public PairEffect<D, Viscosity<D, StressForm>> {
  public:
-  explicit Viscosity(ConfigTable&) {}
+  explicit Viscosity(ConfigTable& cfg) {
+    if constexpr (StressForm) {
+      wall_continued_ = cfg.choice("wall_stress", "omitted", {"omitted", "continued"}) == "continued";
+    } else if (cfg.has("wall_stress")) {
+      throw InputError("effects.viscosity.wall_stress applies to the stress form's kappa^T sum: set form = \"stress\" "
+                       "or remove it");
+    }
+  }
   std::string_view name() const override { return "viscosity"; }
   Phase phase() const override { return Phase::forces; }
   std::string_view form() const override { return StressForm ? "stress" : "laplacian"; }
@@ -160,7 +171,7 @@ class Viscosity final : public PairEffect<D, Viscosity<D, StressForm>> {
     const double w = weight(nb, l);
     for (int a = 0; a < D; ++a) l.acc[a] += w * (l.vi[a] - l.fixed_velocity[D * (nb.j - l.fixed0) + a]);
     if constexpr (StressForm) {  // eq. (3.18) with the wall's mu kappa^T continued as mu kappa_i^T
-      if (!l.transposed.kappa) return;
+      if (!wall_continued_ || !l.transposed.kappa) return;
       const double inv_rho = 1.0 / l.rho[nb.j];
       l.acc += (l.m[nb.j] * nb.F) * ((l.transposed.i_over_rho2 + l.transposed.i * (inv_rho * inv_rho)) * nb.rij);
     }
@@ -180,6 +191,7 @@ class Viscosity final : public PairEffect<D, Viscosity<D, StressForm>> {
   }
 
   const Field* kappa_ = nullptr;
+  bool wall_continued_ = false;  // wall_stress = "continued" (the stress form)
   double mu_ = 0, nu_ = 0;
   const Field* wall_velocity_ = nullptr;
   std::vector<double> zero_velocity_;  // all neighbour velocities, for the Jacobian's diagonal
