@@ -9,7 +9,7 @@
 // symmetric); the divergence is taken over the second index, (div S)^a = dS^{ab}/dx^b.
 // wall_stress = "continued": a wall neighbour enters with the fluid particle's own S_i in place
 // of its extrapolated S_j (a constant continuation of each particle's stress into the wall, as
-// the stress form of the viscous force does with mu kappa^T). Fang's eq. 46 average over a wall
+// [effects.viscosity] wall_stress = "continued" does with mu kappa^T). Fang's eq. 46 average over a wall
 // particle's fluid neighbours turns through large angles of azimuth beside a thin rod (a radius
 // of a few spacings); the continuation does not depend on the wall's shape (docs/theory.md §5.6,
 // measured in docs/validation.md §20).
