@@ -55,6 +55,22 @@ struct Box {
       add(x, velocity(x), kRho0, mass());
     }
   }
+  // A fluid annulus a <= r < R on the square lattice of spacing dx about the origin (cell
+  // centres), around a rod of wall particles on the lattice points r < a (2D); each particle
+  // with the velocity v(x). The fluid first, in lattice order, then the rod.
+  template <class Fn>
+  void annulusAroundRod(double a, double R, Fn&& velocity) {
+    static_assert(D == 2, "a 2D lattice");
+    const int n = static_cast<int>(std::ceil(R / dx)) + 1;
+    std::vector<Vec<D>> rod;
+    for (int i = -n; i < n; ++i)
+      for (int j = -n; j < n; ++j) {
+        const Vec<D> x((i + 0.5) * dx, (j + 0.5) * dx);
+        if (x.norm() < a) rod.push_back(x);
+        else if (x.norm() < R) add(x, velocity(x), kRho0, mass());
+      }
+    for (const Vec<D>& x : rod) add(x, velocity(x), kRho0, mass(), true);
+  }
   void finish(std::vector<std::unique_ptr<Effect<D>>> extra = {}) {
     ConfigTable root = cfg.root();
     ConfigTable eff = root.table("effects");

@@ -8,7 +8,6 @@
 #include <algorithm>
 #include <memory>
 #include <string>
-#include <vector>
 
 #include "hand_built_system.hpp"
 #include "vesph/physics/constitutive.hpp"
@@ -28,14 +27,7 @@ double worstForceBesideRod(const std::string& wall_stress, const Mat<2>& S0, con
   Box<2> b("[effects.velocity_gradient]\n[effects.oldroyd_b]\nrelaxation_time = 0.1\npolymer_viscosity = 1.0\n"
            "[effects.stress_divergence]\nwall_stress = \"" + wall_stress + "\"\n",
            dx, 1.6, KernelType::quintic, 2 * R, false);
-  std::vector<Vec<2>> rod;
-  for (int i = -21; i < 21; ++i)
-    for (int j = -21; j < 21; ++j) {
-      const Vec<2> x((i + 0.5) * dx, (j + 0.5) * dx);
-      if (x.norm() < a) rod.push_back(x);
-      else if (x.norm() < R) b.add(x, Vec<2>::Zero(), kRho0, b.mass());
-    }
-  for (const Vec<2>& x : rod) b.add(x, Vec<2>::Zero(), kRho0, b.mass(), true);
+  b.annulusAroundRod(a, R, [](const Vec<2>&) { return Vec<2>::Zero(); });
   b.finish();
   Field* S = b.sys.particles.fields.find("elastic_stress");
   REQUIRE(S != nullptr);

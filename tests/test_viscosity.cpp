@@ -131,15 +131,7 @@ TEST_CASE("viscosity: fluid turning rigidly with a turning rod: wall_stress = co
   auto run = [&](const std::string& effects) {
     auto b = std::make_unique<Box<2>>(effects, dx, 1.6, KernelType::quintic, 2 * R, false);
     b->viscosity = kMu;
-    std::vector<Vec<2>> rod;
-    for (int i = -21; i < 21; ++i)
-      for (int j = -21; j < 21; ++j) {
-        const Vec<2> x((i + 0.5) * dx, (j + 0.5) * dx);
-        const Vec<2> v(-Omega * x[1], Omega * x[0]);
-        if (x.norm() < a) rod.push_back(x);
-        else if (x.norm() < R) b->add(x, v, kRho0, b->mass());
-      }
-    for (const Vec<2>& x : rod) b->add(x, Vec<2>(-Omega * x[1], Omega * x[0]), kRho0, b->mass(), true);
+    b->annulusAroundRod(a, R, [&](const Vec<2>& x) { return Vec<2>(-Omega * x[1], Omega * x[0]); });
     b->finish();
     b->evaluate();
     const double scale = kMu / kRho0 * Omega * R / (1.6 * dx * 1.6 * dx);  // nu Omega R / h^2

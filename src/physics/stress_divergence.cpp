@@ -44,8 +44,8 @@ class StressDivergence final : public PairEffect<D, StressDivergence<D>> {
 
   struct Local {
     Vec<D> acc;
-    Mat<D> Si;
     Mat<D> Si_over_rho2;
+    double rho_i2;  // rho_i^2: S_i = Si_over_rho2 rho_i^2 for a continued wall neighbour
     const double* S;
     const double* rho;
     const double* m;
@@ -53,8 +53,8 @@ class StressDivergence final : public PairEffect<D, StressDivergence<D>> {
   Local begin(const RhsContext<D>& ctx, Index i) const {
     const ParticleSet<D>& p = ctx.particles;
     const double rho = p.density[i];
-    const Mat<D> Si = load(stress_->data.data(), i);
-    return {Vec<D>::Zero(), Si, Si / (rho * rho), stress_->data.data(), p.density.data(), p.mass.data()};
+    return {Vec<D>::Zero(), load(stress_->data.data(), i) / (rho * rho), rho * rho, stress_->data.data(),
+            p.density.data(), p.mass.data()};
   }
   void pair(const RhsContext<D>&, Index, const Neighbour<D>& nb, Local& l) const {
     const double inv_rho = 1.0 / l.rho[nb.j];
@@ -64,7 +64,7 @@ class StressDivergence final : public PairEffect<D, StressDivergence<D>> {
   void pairFixed(const RhsContext<D>& ctx, Index i, const Neighbour<D>& nb, Local& l) const {
     if (!continued_) return pair(ctx, i, nb, l);
     const double inv_rho = 1.0 / l.rho[nb.j];
-    l.acc += (l.m[nb.j] * nb.F) * ((l.Si_over_rho2 + l.Si * (inv_rho * inv_rho)) * nb.rij);
+    l.acc += (l.m[nb.j] * nb.F * (1.0 + l.rho_i2 * inv_rho * inv_rho)) * (l.Si_over_rho2 * nb.rij);
   }
   void end(const RhsContext<D>& ctx, Index i, Local& l) const {
     if (ctx.part == RhsPart::implicit_diagonal) return;  // it depends on the stress, not on v_i

@@ -43,7 +43,7 @@ struct Nothing {};
 template <int D>
 struct TransposedStressOf {
   Mat<D> i_over_rho2;    // mu kappa_i^T / rho_i^2
-  Mat<D> i;              // mu kappa_i^T: a wall neighbour's value (constant continuation)
+  double rho_i2;         // rho_i^2: a continued wall neighbour carries mu kappa_i^T = i_over_rho2 rho_i^2
   const double* kappa;   // the velocity gradients (row-major D x D); null: the term is left out
 };
 
@@ -146,14 +146,13 @@ class Viscosity final : public PairEffect<D, Viscosity<D, StressForm>> {
       // is whole).
       Local l{Vec<D>::Zero(), Vec<D>::Ones(), 2.0 * mu_ / p.density[i], zero_velocity_.data(), p.density.data(),
               p.mass.data(), zero_velocity_.data(), 0, {}};
-      if constexpr (StressForm) l.transposed = {Mat<D>::Zero(), Mat<D>::Zero(), nullptr};
+      if constexpr (StressForm) l.transposed = {Mat<D>::Zero(), 0.0, nullptr};
       return l;
     }
     Local l{Vec<D>::Zero(), p.v(i), 2.0 * mu_ / p.density[i], p.velocity.data(), p.density.data(), p.mass.data(), fv, fixed0, {}};
     if constexpr (StressForm) {
       const double rho = p.density[i];
-      const Mat<D> Ti = transposedStress(kappa_->data.data(), i);
-      l.transposed = {Ti / (rho * rho), Ti, kappa_->data.data()};
+      l.transposed = {transposedStress(kappa_->data.data(), i) / (rho * rho), rho * rho, kappa_->data.data()};
     }
     return l;
   }
@@ -173,7 +172,7 @@ class Viscosity final : public PairEffect<D, Viscosity<D, StressForm>> {
     if constexpr (StressForm) {  // eq. (3.18) with the wall's mu kappa^T continued as mu kappa_i^T
       if (!wall_continued_ || !l.transposed.kappa) return;
       const double inv_rho = 1.0 / l.rho[nb.j];
-      l.acc += (l.m[nb.j] * nb.F) * ((l.transposed.i_over_rho2 + l.transposed.i * (inv_rho * inv_rho)) * nb.rij);
+      l.acc += (l.m[nb.j] * nb.F * (1.0 + l.transposed.rho_i2 * inv_rho * inv_rho)) * (l.transposed.i_over_rho2 * nb.rij);
     }
   }
   void end(const RhsContext<D>& ctx, Index i, Local& l) const {
