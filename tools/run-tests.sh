@@ -22,14 +22,15 @@ cmake --build build-asan
 # The AMG solver's tests ("linear solvers: ...") run with the leak checker off: hypre's BoomerAMG
 # needs MPI, and OpenMPI's MPI_Init/MPI_Finalize leave allocations behind that LeakSanitizer
 # reports, some from MPI plugins already unloaded at exit (no module left to suppress them by);
-# the address and undefined-behaviour checks stay on for them. The same for arkode-imex's model
+# the address and undefined-behaviour checks stay on for them. The same for the distributed
+# layer's tests (mpi.*: MPI and Zoltan) and for arkode-imex's model
 # tests, whose stage solves are preconditioned by BoomerAMG (integrator.preconditioner = "amg").
 # The matches of semi-implicit against the leapfrog and of arkode-imex against an explicit run go
 # through the Newtonian and Oldroyd-B models here (the other three models in the Release suite
 # only: each costs the sanitizer build 45-100 s, and their effects' loops are covered by their
 # own unit tests here).
 ctest --test-dir build-asan --output-on-failure -j 2 \
-  -E '^(cli|tools|docs|long)[.]|^linear solvers|^integrators: arkode-imex matches|^integrators: semi-implicit matches the leapfrog: (second-order fluid|UCM|XPP)$'
+  -E '^(cli|tools|docs|long|mpi)[.]|^linear solvers|^integrators: arkode-imex matches|^integrators: semi-implicit matches the leapfrog: (second-order fluid|UCM|XPP)$'
 ASAN_OPTIONS=detect_leaks=0 ctest --test-dir build-asan --output-on-failure -j 2 \
-  -R '^linear solvers|^integrators: arkode-imex matches an explicit run: (Newtonian|Oldroyd-B)$'
+  -R '^mpi[.]|^linear solvers|^integrators: arkode-imex matches an explicit run: (Newtonian|Oldroyd-B)$'
 ctest --test-dir build-asan --output-on-failure -R '^cli[.](scene_errors|check_and_list|robustness)$'

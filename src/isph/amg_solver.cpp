@@ -16,6 +16,7 @@
 #include "amg_solver.hpp"
 
 #include "vesph/isph/amg_preconditioner.hpp"
+#include "vesph/parallel/communicator.hpp"
 #include "vesph/time/integrator.hpp"
 
 #include <HYPRE.h>
@@ -33,32 +34,18 @@
 namespace vesph {
 namespace {
 
-void finaliseHypre() {
-  HYPRE_Finalize();
-  int finalised = 0;
-  MPI_Finalized(&finalised);
-  if (!finalised) MPI_Finalize();
-}
-
-// MPI and hypre are initialised once per process, at the first AMG solve; finalised at exit.
+// hypre is initialised once per process, at the first AMG solve (MPI first, if nothing started
+// it: parallel/communicator.hpp); finalised at exit, before MPI (atexit runs in reverse order).
 void initialiseHypre() {
   static std::once_flag once;
   std::call_once(once, [] {
-    int initialised = 0;
-    MPI_Initialized(&initialised);
-    if (!initialised) {
-      // A process not started by mpirun is an MPI singleton, and Open MPI then forks a daemon
-      // (orted) that inherits every open descriptor, the output file's among them, with its
-      // HDF5 lock: after vesph exits the daemon lingers a moment holding it, and a `--resume`
-      // started at once finds the file locked. A singleton needs no daemon: the isolated mode
-      // starts none. A value the user set (or mpirun's launch) is kept.
-      setenv("OMPI_MCA_ess_singleton_isolated", "1", /*overwrite=*/0);
-      int provided = 0;
-      if (MPI_Init_thread(nullptr, nullptr, MPI_THREAD_FUNNELED, &provided) != MPI_SUCCESS)
-        throw std::runtime_error("preconditioner = \"amg\": MPI could not be initialised (hypre needs it)");
+    try {
+      ensureMpiInitialised();
+    } catch (const std::exception&) {
+      throw std::runtime_error("preconditioner = \"amg\": MPI could not be initialised (hypre needs it)");
     }
     HYPRE_Init();
-    std::atexit(finaliseHypre);
+    std::atexit([] { HYPRE_Finalize(); });
   });
 }
 
