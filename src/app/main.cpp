@@ -46,9 +46,12 @@ template <int D>
 int runScene(Config& cfg, const SceneHeader& h, const std::string& out_dir, bool quiet, bool resume) {
   Simulation<D> sim(cfg, h);
   const std::string dir = out_dir.empty() ? "output/" + h.name : out_dir;
-  if (!quiet) std::cerr << sim.describe();
+  // A run across processes (mpirun -np N): process 0 speaks for the run.
+  const bool root = !sim.system().distribution || sim.system().distribution->rank() == 0;
+  if (!quiet && root) std::cerr << sim.describe();
   installInterruptHandlers();
   const RunReport r = sim.run(RunOptions{dir, quiet, true, 0, resume});
+  if (!root) return exitCode(r.status);
   std::cerr << "vesph: " << statusName(r.status) << ": " << r.message << "\n"
             << "vesph: output in " << dir << "/ (" << h.name << ".h5, " << h.name << ".xdmf, summary.json); "
             << r.summary["steps"] << " steps, " << r.summary["rhs_evals"] << " rhs evaluations, "

@@ -58,6 +58,7 @@ void ParticleSet<D>::resizeFields() {
 template <int D>
 void ParticleSet<D>::remapMoving(const ParticleRemap& m) {
   if (m.old_size != size() || m.old_moving != n_moving) throw std::logic_error("ParticleRemap made for another particle set");
+  if (n_ghost_moving + n_ghost_fixed != 0) throw std::logic_error("ParticleRemap of a particle set with ghosts");
   std::size_t released = 0;
   for (Index s : m.source)
     if (s >= n_moving) ++released;

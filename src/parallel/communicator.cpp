@@ -38,6 +38,12 @@ void ensureMpiInitialised() {
   });
 }
 
+bool launchedWithSeveralProcesses() {
+  for (const char* name : {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE"})
+    if (const char* v = std::getenv(name); v != nullptr && std::atoi(v) > 1) return true;
+  return false;
+}
+
 Communicator Communicator::world() {
   ensureMpiInitialised();
   return Communicator(MPI_COMM_WORLD);

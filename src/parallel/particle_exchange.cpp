@@ -118,6 +118,7 @@ class SetBuilder {
     std::size_t k = 0;
     for (const auto& f : p.fields.all()) f->data.swap(fields_[k++]);
     p.n_moving = nm_;
+    p.n_ghost_moving = p.n_ghost_fixed = 0;
   }
 
  private:
@@ -141,7 +142,8 @@ ParticleExchange<D>::ParticleExchange(const Communicator& comm, const Domain<D>&
 
 template <int D>
 std::size_t ParticleExchange<D>::migrate(ParticleSet<D>& p, std::span<const int> destination) {
-  if (has_halo_) throw std::logic_error("ParticleExchange::migrate with the halo in place (removeHalo first)");
+  if (has_halo_ || p.n_ghost_moving + p.n_ghost_fixed != 0)
+    throw std::logic_error("ParticleExchange::migrate with the halo in place (removeHalo first)");
   if (destination.size() != p.size()) throw std::invalid_argument("ParticleExchange::migrate: one destination per particle");
   const int ranks = comm_.size(), me = comm_.rank();
   const std::size_t R = static_cast<std::size_t>(ranks);
@@ -293,6 +295,8 @@ void ParticleExchange<D>::buildHalo(ParticleSet<D>& p, const std::vector<Box<D>>
       rec = set.read(p, rec, idk, nm + layout_.owned_fixed + recv_fixed_at_[k] + j);
   }
   set.install(p);
+  p.n_ghost_moving = layout_.ghost_moving;
+  p.n_ghost_fixed = layout_.ghost_fixed;
   // This rank's fixed particles moved up past the ghost moving ones.
   for (std::size_t k = 0; k < K; ++k)
     for (std::size_t s = send_moving_[k]; s < send_[k].size(); ++s) send_[k][s] += static_cast<Index>(layout_.ghost_moving);
@@ -304,6 +308,20 @@ void ParticleExchange<D>::buildHalo(ParticleSet<D>& p, const std::vector<Box<D>>
   for (const auto& s : send_) counters_.ghosts_sent += s.size();
   send_buffer_.resize(K);
   recv_buffer_.resize(K);
+}
+
+template <int D>
+void ParticleExchange<D>::keepOnly(ParticleSet<D>& p, std::span<const char> keep) {
+  if (has_halo_) throw std::logic_error("ParticleExchange::keepOnly with the halo in place");
+  if (keep.size() != p.size()) throw std::invalid_argument("ParticleExchange::keepOnly: one flag per particle");
+  std::size_t nm = 0, nf = 0;
+  for (std::size_t i = 0; i < p.size(); ++i)
+    if (keep[i]) ++(i < p.n_moving ? nm : nf);
+  SetBuilder<D> set(p, nm, nf);
+  std::size_t tm = 0, tf = nm;
+  for (std::size_t i = 0; i < p.size(); ++i)
+    if (keep[i]) set.copy(p, i, i < p.n_moving ? tm++ : tf++);
+  set.install(p);
 }
 
 template <int D>

@@ -22,7 +22,8 @@ template <int D>
 class RunLoop final : public StepObserver {
  public:
   RunLoop(Simulation<D>& sim, const RunOptions& opt)
-      : sim_(sim), opt_(opt), t_start_(Clock::now()),
+      : sim_(sim), opt_(opt), t_start_(Clock::now()), distribution_(sim.system_.distribution.get()),
+        root_(distribution_ == nullptr || distribution_->rank() == 0),
         // --resume: the checkpoint of the earlier segment replaces the initial state.
         resumed_(opt.resume ? sim.checkpoints_.resume(opt.output_dir, resumeRules()) : Checkpoint{}),
         t0_(resumed_.time), writer_(openWriter()), scratch_(sim.state_.size()),
@@ -33,6 +34,7 @@ class RunLoop final : public StepObserver {
   bool accepted(double t, double dt, const double* y) override;
   bool stepCollapsed(double t, double dt);
   bool writtenFieldsFinite() const;
+  bool locallyFinite() const;
 
  private:
   using Clock = std::chrono::steady_clock;
@@ -48,6 +50,10 @@ class RunLoop final : public StepObserver {
   Simulation<D>& sim_;
   const RunOptions& opt_;
   const Clock::time_point t_start_;
+  // A run across processes (docs/architecture.md "Distributed runs"): process 0 writes the
+  // file, the summary and the progress; every process takes part in each frame's gathering.
+  ParticleDistribution<D>* const distribution_;
+  const bool root_;
   const Checkpoint resumed_;
   const double t0_;
   std::unique_ptr<OutputWriter<D>> writer_;
@@ -68,7 +74,7 @@ ResumeRules RunLoop<D>::resumeRules() const {
 
 template <int D>
 std::unique_ptr<OutputWriter<D>> RunLoop<D>::openWriter() const {
-  if (opt_.output_dir.empty()) return nullptr;
+  if (opt_.output_dir.empty() || !root_) return nullptr;
   const SphSystem<D>& sys = sim_.system_;
   const FileAttributes attrs{D, sim_.resolved_scene_, sim_.dx_, sys.kernel.h, std::string(kernelName(sys.kernel.type)),
                              StepChecks<D>::hookColumns(sys), sim_.gauges_.series()};
@@ -97,7 +103,7 @@ Checkpoint RunLoop<D>::totals(double t) const {
 // a failure): a state whose written fields are not all finite is not written (returns false).
 template <int D>
 bool RunLoop<D>::writeFrame(double t, bool only_if_finite) {
-  if (!writer_ || t == last_frame_time_) return true;  // that state is written already
+  if (opt_.output_dir.empty() || t == last_frame_time_) return true;  // that state is written already
   const std::vector<double>& y = sim_.state_.values();
   scratch_.resize(y.size());  // the particle count may have changed (inflow, outflow)
   sim_.system_.unpack(y.data());
@@ -111,6 +117,16 @@ bool RunLoop<D>::writeFrame(double t, bool only_if_finite) {
     throw NumericalFailure(os.str());
   }
   last_frame_time_ = t;
+  if (distribution_) {
+    // The owned particles of every process, gathered on process 0 in id order. No checkpoint
+    // yet: a distributed run cannot be resumed (issue 36).
+    const ParticleSet<D> whole = distribution_->gather(sim_.system_.particles);
+    if (writer_ && !sim_.gauges_.empty())  // measured on the whole set, as in a serial run
+      writer_->appendGauges(sim_.gauges_.evaluate(t, whole, sim_.system_.kernel, sim_.system_.domain));
+    if (writer_) writer_->writeFrame(t, static_cast<std::int64_t>(steps_), whole, pending_);
+    pending_.clear();
+    return true;
+  }
   // The gauges from the frame's particle set (its pressure from the evaluation above).
   if (!sim_.gauges_.empty())
     writer_->appendGauges(sim_.gauges_.evaluate(t, sim_.system_.particles, sim_.system_.kernel, sim_.system_.domain));
@@ -124,6 +140,12 @@ bool RunLoop<D>::writeFrame(double t, bool only_if_finite) {
 // and the derived fields of every particle (pressure, stresses).
 template <int D>
 bool RunLoop<D>::writtenFieldsFinite() const {
+  const bool here = locallyFinite();
+  return distribution_ ? distribution_->sum(static_cast<std::uint64_t>(here ? 0 : 1)) == 0 : here;
+}
+
+template <int D>
+bool RunLoop<D>::locallyFinite() const {
   const ParticleSet<D>& p = sim_.system_.particles;
   auto finite = [](const std::vector<double>& v) {
     return std::all_of(v.begin(), v.end(), [](double x) { return std::isfinite(x); });
@@ -167,7 +189,7 @@ bool RunLoop<D>::accepted(double t, double dt, const double* y) {
   max_dev_seen_ = std::max(max_dev_seen_, row.max_density_deviation);
   pending_.push_back(row);
   sim_.state_.keepGood(t, y);
-  if (opt_.progress) progress_.update(t, steps_, dt);
+  if (opt_.progress && root_) progress_.update(t, steps_, dt);
   if (interruptRequested()) return false;
   if (opt_.max_steps && steps_ >= opt_.max_steps) return false;
   return true;
@@ -251,7 +273,7 @@ RunReport RunLoop<D>::run() {
   }
   if (status == RunStatus::diverged) writeLastGood(message);
   Integrator& integrator = *sim_.integrator_;
-  if (opt_.progress) {
+  if (opt_.progress && root_) {
     progress_.update(integrator.time(), steps_, integrator.lastStep(), true);
     progress_.finish();
   }
@@ -261,7 +283,7 @@ RunReport RunLoop<D>::run() {
   report.final_time = status == RunStatus::diverged ? sim_.state_.goodTime() : integrator.time();
   report.wall_seconds = std::chrono::duration<double>(Clock::now() - t_start_).count();
   report.summary = summary(report);
-  if (!opt_.output_dir.empty()) {
+  if (!opt_.output_dir.empty() && root_) {
     try {
       writeSummary(opt_.output_dir, report.summary);
     } catch (const std::exception&) {
@@ -289,8 +311,18 @@ nlohmann::json RunLoop<D>::summary(const RunReport& report) {
   s["wall_seconds"] = total.wall_seconds;
   if (opt_.resume)
     s["resumed"] = {{"from_time", t0_}, {"count", total.resumes}, {"segment_wall_seconds", report.wall_seconds}};
-  s["particles"] = sys.particles.size();
-  s["fluid_particles"] = sys.particles.n_moving;
+  if (distribution_) {
+    const ParticleSet<D>& p = sys.particles;
+    s["particles"] = distribution_->sum(static_cast<std::uint64_t>(p.ownedMoving() + p.ownedEnd() - p.n_moving));
+    s["fluid_particles"] = distribution_->sum(static_cast<std::uint64_t>(p.ownedMoving()));
+    s["processes"] = distribution_->size();
+    s["redistributions"] = distribution_->redistributions();
+    s["repartitions"] = distribution_->repartitions();
+    s["load_imbalance"] = distribution_->imbalance();
+  } else {
+    s["particles"] = sys.particles.size();
+    s["fluid_particles"] = sys.particles.n_moving;
+  }
   s["integrator"] = sim_.integrator_name_;
   s["threads"] = omp_get_max_threads();
   s["max_density_deviation"] = max_dev_seen_;
@@ -311,6 +343,9 @@ nlohmann::json RunLoop<D>::summary(const RunReport& report) {
 
 template <int D>
 RunReport Simulation<D>::run(const RunOptions& options) {
+  if (system_.distribution && options.resume)
+    throw InputError("--resume: a run across processes writes no checkpoint yet (issue 36); resume as one process "
+                     "from a serial run's file");
   return RunLoop<D>(*this, options).run();
 }
 

@@ -6,6 +6,10 @@
 #include <sstream>
 
 #include "vesph/boundary/registry.hpp"
+#include "vesph/parallel/communicator.hpp"
+#if VESPH_HAVE_MPI_RUNS
+#include "vesph/parallel/mpi_distribution.hpp"
+#endif
 #include "vesph/physics/registry.hpp"
 #include "vesph/time/integrator_factory.hpp"
 #include "vesph/sim/particle_generation.hpp"
@@ -109,10 +113,49 @@ Simulation<D>::Simulation(Config& config, const SceneHeader& header) : config_(c
 
   config.rejectUnknownKeys();
   resolved_scene_ = config.resolvedToml();
+  if (launchedWithSeveralProcesses()) distribute();
   state_.resize(system_.size());
   system_.pack(state_.data());
   checkpoints_.joinScene();
   checkpoints_.joinIntegrator(*integrator_);
+}
+
+// A run across processes (mpirun -np N, N > 1; docs/architecture.md "Distributed runs"):
+// every process has built the whole scene; the system keeps this process's share. What keeps
+// particle indices or per-particle state outside the field store is not distributed yet
+// (issue 36) and is refused here, before the run.
+template <int D>
+void Simulation<D>::distribute() {
+  whole_scene_.particles = system_.particles.size();
+  whole_scene_.moving = system_.particles.n_moving;
+  std::vector<std::string> missing;
+  for (const auto& hk : system_.hooks) missing.push_back("the hook " + std::string(hk->name()));
+  if (!wall_points_.empty())
+    missing.push_back("per-particle wall treatments (image walls, pressure_floor, polar frames, stress_extrapolation)");
+  if (system_.movesFixed()) missing.push_back("moving walls");
+  for (const auto& e : system_.effects)
+    if (e->name() == "second_order_fluid" || e->name() == "particle_shifting")
+      missing.push_back("the effect " + std::string(e->name()) + " (it carries per-particle values between steps)");
+  const std::string& integ = integrator_name_;
+  if (integ.rfind("leapfrog", 0) != 0 && integ.rfind("midpoint", 0) != 0 && integ.rfind("symplectic", 0) != 0)
+    missing.push_back("the integrator " + integ + " (leapfrog, midpoint and symplectic run distributed)");
+  if (!missing.empty()) {
+    std::string what = config_.file() + ": a run across processes (mpirun -np N, N > 1) does not support yet (issue 36): ";
+    for (std::size_t k = 0; k < missing.size(); ++k) what += (k ? "; " : "") + missing[k];
+    throw InputError(what + ". Run it as one process.");
+  }
+#if VESPH_HAVE_MPI_RUNS
+  system_.distribution =
+      makeMpiDistribution<D>(system_.domain, system_.kernel.supportRadius(), skin_ * system_.kernel.supportRadius(), 1.1);
+  system_.distribute();
+  const ParticleSet<D>& p = system_.particles;
+  whole_scene_.processes = system_.distribution->size();
+  whole_scene_.imbalance = system_.distribution->imbalance();
+  whole_scene_.ghosts = system_.distribution->sum(static_cast<std::uint64_t>(p.n_ghost_moving + p.n_ghost_fixed));
+#else
+  throw InputError("this vesph was built without distributed runs (CMake option VESPH_MPI, which needs Zoltan: "
+                   "libtrilinos-zoltan-dev); run it as one process");
+#endif
 }
 
 template <int D>
@@ -225,8 +268,15 @@ std::string Simulation<D>::describe() const {
   std::ostringstream os;
   const auto& p = system_.particles;
   const StabilitySnapshot s = system_.stability();
-  os << "# scene '" << header_.name << "': " << D << "D, " << p.size() << " particles (" << p.n_moving
-     << " fluid, " << p.nFixed() << " fixed)\n"
+  const std::size_t all = whole_scene_.processes > 1 ? whole_scene_.particles : p.size();
+  const std::size_t moving = whole_scene_.processes > 1 ? whole_scene_.moving : p.n_moving;
+  os << "# scene '" << header_.name << "': " << D << "D, " << all << " particles (" << moving << " fluid, "
+     << all - moving << " fixed)\n";
+  if (whole_scene_.processes > 1)
+    os << "# distributed over " << whole_scene_.processes << " processes (Zoltan RCB): load imbalance "
+       << whole_scene_.imbalance << " (largest share of the fluid over the mean), " << whole_scene_.ghosts
+       << " ghosts in all\n";
+  os
      << "# dx = " << dx_ << " m, h = " << system_.kernel.h << " m, kernel " << kernelName(system_.kernel.type)
      << " (support " << system_.kernel.supportRadius() << " m)\n";
   if (const PressureModel* m = system_.pressureModel()) {

@@ -10,7 +10,7 @@ namespace vesph {
 template <int D>
 DiagnosticsRow StepChecks<D>::diagnostics(const SphSystem<D>& system, double t, double dt, const double* y) {
   const ParticleSet<D>& p = system.particles;
-  const std::size_t n = p.n_moving;
+  const std::size_t n = p.ownedMoving();
   const double* rho = y + n * D;
   const double* v = y + n * (D + 1);
   double ke = 0, mass = 0, vmax2 = 0, dev = 0;
@@ -23,6 +23,12 @@ DiagnosticsRow StepChecks<D>::diagnostics(const SphSystem<D>& system, double t, 
     mass += p.mass[i];
     vmax2 = std::max(vmax2, v2);
     dev = std::max(dev, std::abs(rho[i] / rho0 - 1.0));
+  }
+  if (system.distribution) {  // the row of the whole run, the same on every process
+    ke = system.distribution->sum(ke);
+    mass = system.distribution->sum(mass);
+    vmax2 = system.distribution->max(vmax2);
+    dev = system.distribution->max(dev);
   }
   DiagnosticsRow row{t, dt, ke, mass, std::sqrt(vmax2), dev, {}};
   std::size_t k = 0;
@@ -37,8 +43,15 @@ DiagnosticsRow StepChecks<D>::diagnostics(const SphSystem<D>& system, double t, 
 
 template <int D>
 std::string StepChecks<D>::failure(const SphSystem<D>& system, const DiagnosticsRow& row, const double* y) const {
+  const std::string local = localFailure(system, row, y);
+  // A distributed run stops on every process when one finds a failure, with its message.
+  return system.distribution ? system.distribution->firstMessage(local) : local;
+}
+
+template <int D>
+std::string StepChecks<D>::localFailure(const SphSystem<D>& system, const DiagnosticsRow& row, const double* y) const {
   std::ostringstream os;
-  const std::size_t n = system.particles.n_moving;
+  const std::size_t n = system.particles.ownedMoving();
   if (!std::isfinite(row.kinetic_energy) || !std::isfinite(row.max_density_deviation)) {
     for (std::size_t k = 0; k < n * (2 * D + 1); ++k)
       if (!std::isfinite(y[k])) {

@@ -87,21 +87,31 @@ void SphSystem<D>::setup(double spacing, double rest_density, double viscosity, 
 }
 
 template <int D>
+void SphSystem<D>::distribute() {
+  if (!distribution) return;
+  distribution->distribute(particles);
+  neighbours.update(particles, true);
+  driver.prepare(neighbours);
+}
+
+// The state holds the moving particles this process owns (all of them in a serial run).
+template <int D>
 std::size_t SphSystem<D>::size() const {
-  std::size_t n = particles.n_moving * (2 * D + 1);
-  for (const Field* f : evolving_) n += particles.n_moving * static_cast<std::size_t>(f->components);
+  const std::size_t owned = particles.ownedMoving();
+  std::size_t n = owned * (2 * D + 1);
+  for (const Field* f : evolving_) n += owned * static_cast<std::size_t>(f->components);
   return n;
 }
 
 template <int D>
 StateSegments SphSystem<D>::segments() const {
-  const std::size_t n = particles.n_moving;
+  const std::size_t n = particles.ownedMoving();
   return {0, n * D, n * (D + 1), n * (2 * D + 1)};
 }
 
 template <int D>
 void SphSystem<D>::pack(double* y) const {
-  const std::size_t n = particles.n_moving;
+  const std::size_t n = particles.ownedMoving();
   std::memcpy(y, particles.position.data(), sizeof(double) * n * D);
   std::memcpy(y + n * D, particles.density.data(), sizeof(double) * n);
   std::memcpy(y + n * (D + 1), particles.velocity.data(), sizeof(double) * n * D);
@@ -114,7 +124,7 @@ void SphSystem<D>::pack(double* y) const {
 
 template <int D>
 void SphSystem<D>::unpack(const double* y) {
-  const std::size_t n = particles.n_moving;
+  const std::size_t n = particles.ownedMoving();
   double* x = particles.position.data();
   double* rho = particles.density.data();
   double* v = particles.velocity.data();
@@ -136,9 +146,8 @@ void SphSystem<D>::unpack(const double* y) {
 }
 
 template <int D>
-void SphSystem<D>::particlePass(const std::vector<Effect<D>*>& list, const RhsContext<D>& ctx) {
+void SphSystem<D>::particlePass(const std::vector<Effect<D>*>& list, const RhsContext<D>& ctx, std::size_t n) {
   if (list.empty()) return;
-  const std::size_t n = particles.n_moving;
   // An exception must not leave an OpenMP region (that terminates the program): the first
   // one (a model's NumericalFailure) is kept and rethrown after the region.
   std::exception_ptr failure;
@@ -193,10 +202,14 @@ void SphSystem<D>::rhsPart(RhsPart part, double t, const double* y, double* ydot
 template <int D>
 void SphSystem<D>::evaluateWith(const PhaseLists& lists, RhsPart part, double t, const double* y, double* ydot) {
   unpack(y);
+  // A distributed run: the ghosts take their owners' state (docs/architecture.md "Distributed
+  // runs"); after each phase below that writes values a later one reads from neighbours, the
+  // ghosts take those too.
+  if (distribution) distribution->refreshState(particles, evolving_);
   placeFixed(t);  // moving walls at time t (before the list sees the positions)
   if (neighbours.update(particles)) driver.prepare(neighbours);
 
-  const std::size_t n = particles.n_moving;
+  const std::size_t n = particles.ownedMoving();
   double* dxdt = ydot;
   double* drhodt = ydot + n * D;
   double* dvdt = ydot + n * (D + 1);
@@ -221,12 +234,17 @@ void SphSystem<D>::evaluateWith(const PhaseLists& lists, RhsPart part, double t,
   }
 
   const RhsContext<D> ctx{particles, kernel, domain, t, dxdt, drhodt, dvdt, field_rates_.data(), part};
-  particlePass(lists.state, ctx);
+  // The state phase (the pressure from the density) is per particle and writes no rate: it runs
+  // over the ghosts too, which saves a refresh.
+  particlePass(lists.state, ctx, particles.n_moving);
   for (auto& b : boundaries) b->update(ctx, neighbours, driver);
+  if (distribution && !boundaries.empty()) distribution->refreshFields(particles);
   driver.run(ctx, neighbours, lists.gradients);
-  particlePass(lists.rates, ctx);
+  if (distribution && !lists.gradients.empty()) distribution->refreshFields(particles);
+  particlePass(lists.rates, ctx, n);
+  if (distribution && !lists.rates.empty()) distribution->refreshFields(particles);
   driver.run(ctx, neighbours, lists.forces);
-  particlePass(lists.external, ctx);
+  particlePass(lists.external, ctx, n);
   // The stability inputs come from full and explicit evaluations (the implicit part's
   // velocities are Krylov directions within a linear solve, not states).
   if (implicit) return;
@@ -241,6 +259,10 @@ void SphSystem<D>::evaluateWith(const PhaseLists& lists, RhsPart part, double t,
     }
     vmax2 = std::max(vmax2, v2);
     amax2 = std::max(amax2, a2);
+  }
+  if (distribution) {  // every process takes the same step
+    vmax2 = distribution->max(vmax2);
+    amax2 = distribution->max(amax2);
   }
   max_speed_ = std::sqrt(vmax2);
   (part == RhsPart::full ? max_acceleration_ : explicit_max_acceleration_) = std::sqrt(amax2);
@@ -329,9 +351,13 @@ bool SphSystem<D>::afterStep(double t, double dt, double* y) {
   placeFixed(t);  // the hooks (the ISPH projection) see the moving walls at the step's time
   StepContext<D>& context = stepContext();
   for (auto& hk : hooks) hk->apply(context, t, dt, y);
-  const std::size_t n = particles.n_moving;
+  const std::size_t n = particles.ownedMoving();
   const AcceptedStep<D> step{t, dt, n, y, y + n * D, y + n * (D + 1)};
   for (auto& e : effects) e->afterStep(step);
+  if (distribution) {
+    unpack(y);
+    redistribute_pending_ = distribution->needsRedistribution(particles, max_speed_ * dt);
+  }
   return true;
 }
 
@@ -342,23 +368,92 @@ double* SphSystem<D>::resizeState(double, double*) {
 }
 
 template <int D>
+bool SphSystem<D>::resizeKeepsRates() const {
+  return distribution && redistribute_pending_ && !anyHook(&StepHook<D>::pendingChanges);
+}
+
+// The rates of the owned moving particles, in the state's layout, into the field
+// "carried_rate" (one row of the state's per-particle values each), and back.
+template <int D>
+void SphSystem<D>::stashRates(const double* rate) {
+  const std::size_t n = particles.ownedMoving();
+  std::size_t width = 2 * D + 1;
+  for (const Field* f : evolving_) width += static_cast<std::size_t>(f->components);
+  Field& carried = particles.fields.require("carried_rate", static_cast<int>(width), Field::Range::moving);
+  carried.refreshed_in_halo = false;
+  carried.data.assign(particles.n_moving * width, 0.0);
+  for (std::size_t i = 0; i < n; ++i) {
+    double* row = carried.at(i);
+    for (int a = 0; a < D; ++a) row[a] = rate[D * i + a];
+    row[D] = rate[n * D + i];
+    for (int a = 0; a < D; ++a) row[D + 1 + a] = rate[n * (D + 1) + D * i + a];
+  }
+  std::size_t off = n * (2 * D + 1), col = 2 * D + 1;
+  for (const Field* f : evolving_) {
+    const std::size_t c = static_cast<std::size_t>(f->components);
+    for (std::size_t i = 0; i < n; ++i)
+      for (std::size_t k = 0; k < c; ++k) carried.at(i)[col + k] = rate[off + c * i + k];
+    off += n * c;
+    col += c;
+  }
+}
+
+template <int D>
+void SphSystem<D>::takeRates(double* rate) const {
+  const Field* carried = particles.fields.find("carried_rate");
+  if (!carried) throw std::logic_error("SphSystem::takeRates without stashRates");
+  const std::size_t n = particles.ownedMoving();
+  for (std::size_t i = 0; i < n; ++i) {
+    const double* row = carried->at(i);
+    for (int a = 0; a < D; ++a) rate[D * i + a] = row[a];
+    rate[n * D + i] = row[D];
+    for (int a = 0; a < D; ++a) rate[n * (D + 1) + D * i + a] = row[D + 1 + a];
+  }
+  std::size_t off = n * (2 * D + 1), col = 2 * D + 1;
+  for (const Field* f : evolving_) {
+    const std::size_t c = static_cast<std::size_t>(f->components);
+    for (std::size_t i = 0; i < n; ++i)
+      for (std::size_t k = 0; k < c; ++k) rate[off + c * i + k] = carried->at(i)[col + k];
+    off += n * c;
+    col += c;
+  }
+}
+
+template <int D>
 bool SphSystem<D>::afterStepChangesState() const {
   return anyHook(&StepHook<D>::changesState);
 }
 
 template <int D>
 bool SphSystem<D>::mayResize() const {
-  return anyHook(&StepHook<D>::changesParticles);
+  return distribution != nullptr || anyHook(&StepHook<D>::changesParticles);
 }
 
 template <int D>
 bool SphSystem<D>::resizePending() const {
-  return anyHook(&StepHook<D>::pendingChanges);
+  return redistribute_pending_ || anyHook(&StepHook<D>::pendingChanges);
 }
 
 template <int D>
 void SphSystem<D>::rearrangeParticles(const double* y) {
   unpack(y);  // the particle set holds the accepted (and post-processed) state
+  if (distribution) {
+    // The particles go to their owners and the halo is rebuilt. A distributed scene keeps no
+    // particle index anywhere (the scene refuses what does: core/distribution.hpp), so the
+    // effects and boundaries only see a set of a new size.
+    distribution->redistribute(particles);
+    redistribute_pending_ = false;
+    remap_.old_size = particles.size();
+    remap_.old_moving = particles.n_moving;
+    remap_.source.resize(particles.n_moving);
+    for (std::size_t i = 0; i < particles.n_moving; ++i) remap_.source[i] = static_cast<Index>(i);
+    remap_.released_ids.clear();
+    for (auto& e : effects) e->resized(particles, remap_);
+    for (auto& b : boundaries) b->resized(remap_);
+    neighbours.update(particles, true);
+    driver.prepare(neighbours);
+    return;
+  }
   changes_.remove.clear();
   changes_.release.clear();
   StepContext<D>& context = stepContext();

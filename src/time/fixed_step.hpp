@@ -49,12 +49,15 @@ class FixedStepIntegrator : public Integrator {
       ++stats_.steps;
       if (!sys_->afterStep(t_, dt, y_)) return false;
       if (sys_->resizePending()) {  // particles released or removed: a new state, F again
+        const bool keeps_rates = sys_->resizeKeepsRates();  // only moved between processes
+        if (keeps_rates) sys_->stashRates(rate_.data());
         y_ = sys_->resizeState(t_, y_);
         n_ = sys_->size();
         rate_.assign(n_, 0.0);
         work_.assign(n_, 0.0);
         allocate();
-        evaluate(t_, y_, rate_.data());
+        if (keeps_rates) sys_->takeRates(rate_.data());
+        else evaluate(t_, y_, rate_.data());
       } else if (sys_->afterStepChangesState()) {
         evaluate(t_, y_, rate_.data());  // F at the projected state
       }

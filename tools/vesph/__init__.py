@@ -27,6 +27,7 @@ REPO = os.path.dirname(TOOLS)
 # Tool name (the old script's name, without .py) -> module, for `vesph-post` and `python3 -m vesph`.
 TOOL_MODULES = {
     "check_output": "vesph.checks.output_file",
+    "same_run_check": "vesph.checks.same_run",
     "paraview_check": "vesph.checks.paraview",
     "poiseuille_check": "vesph.checks.poiseuille",
     "startup_channel_check": "vesph.checks.startup_channel",

@@ -49,8 +49,9 @@ class PairLoop {
       if (s.size() < list.maxCount()) s.resize(list.maxCount() + 16);
   }
 
-  // fn(i, moving neighbours, fixed neighbours) for every moving particle i, in parallel. W is
-  // evaluated only with with_w. Returns the pairs handed out.
+  // fn(i, moving neighbours, fixed neighbours) for every moving particle i this process owns
+  // (all of them in a serial run; a distributed run's ghosts are neighbours only), in parallel.
+  // W is evaluated only with with_w. Returns the pairs handed out.
   template <class Fn>
   std::uint64_t forEachMoving(const ParticleSet<D>& p, const Kernel& kernel, const Domain<D>& domain,
                               const NeighbourList<D>& list, bool with_w, Fn&& fn) {
@@ -64,7 +65,7 @@ class PairLoop {
   template <bool WithW, class Fn, class Pred = bool (*)(Index)>
   std::uint64_t forEachMovingWhere(const ParticleSet<D>& p, const Kernel& kernel, const Domain<D>& domain,
                                    const NeighbourList<D>& list, Fn&& fn, Pred&& wanted = everyParticle) {
-    const std::size_t n = p.n_moving;
+    const std::size_t n = p.ownedMoving();
     std::uint64_t pairs = 0;
     kernel.visit([&](auto shape) {
 #pragma omp parallel reduction(+ : pairs) if (n >= kParallelMinimum)
@@ -83,12 +84,13 @@ class PairLoop {
     return pairs;
   }
 
-  // A pass over the fixed particles, each with its moving neighbours (W evaluated):
-  // fn(i, span<const Neighbour<D>>) for i in [n_moving, N). The scratch must be prepared.
+  // A pass over the fixed particles this process owns, each with its moving neighbours (W
+  // evaluated): fn(i, span<const Neighbour<D>>) for i in [n_moving, ownedEnd()). The scratch
+  // must be prepared.
   template <class Fn>
   void forEachFixed(const ParticleSet<D>& p, const Kernel& kernel, const Domain<D>& domain,
                     const NeighbourList<D>& list, Fn&& fn) {
-    const std::size_t n0 = p.n_moving, N = p.size();
+    const std::size_t n0 = p.n_moving, N = p.ownedEnd();
     kernel.visit([&](auto shape) {
 #pragma omp parallel if (N - n0 >= kParallelMinimum)
       {

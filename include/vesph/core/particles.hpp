@@ -32,6 +32,9 @@ struct Field {
   // the average. Scalars (and any field left `invariant`) are averaged as they are.
   enum class Transform { invariant, vector, symmetric_tensor, tensor };
   Transform transform = Transform::invariant;
+  // Whether a distributed run's halo refresh copies it to the ghosts (core/distribution.hpp):
+  // false for values only the owner reads (the integrator's rates carried through a migration).
+  bool refreshed_in_halo = true;
   std::vector<double> data;
 
   double* at(std::size_t k) { return data.data() + k * components; }
@@ -77,6 +80,11 @@ struct ParticleRemap {
 template <int D>
 struct ParticleSet {
   std::size_t n_moving = 0;
+  // A distributed run's ghosts (copies of particles other ranks own, core/distribution.hpp):
+  // the last n_ghost_moving of the moving particles and the last n_ghost_fixed of the fixed
+  // ones. Neighbour loops visit the owned particles only; the ODE state holds the owned moving
+  // ones. Zero in a serial run.
+  std::size_t n_ghost_moving = 0, n_ghost_fixed = 0;
   std::vector<double> position;  // [N*D]
   std::vector<double> velocity;  // [N*D]
   std::vector<double> density;   // [N]
@@ -87,6 +95,10 @@ struct ParticleSet {
 
   std::size_t size() const { return mass.size(); }
   std::size_t nFixed() const { return size() - n_moving; }
+  // The moving particles this process owns, [0, ownedMoving()), and the end of the owned fixed
+  // ones, [n_moving, ownedEnd()): n_moving and size() in a serial run.
+  std::size_t ownedMoving() const { return n_moving - n_ghost_moving; }
+  std::size_t ownedEnd() const { return size() - n_ghost_fixed; }
 
   Eigen::Map<Vec<D>> x(std::size_t i) { return Eigen::Map<Vec<D>>(position.data() + D * i); }
   Eigen::Map<const Vec<D>> x(std::size_t i) const {

@@ -15,6 +15,11 @@ namespace vesph {
 // hypre solvers (src/isph/amg_solver.cpp), which need MPI even in a serial run.
 void ensureMpiInitialised();
 
+// Whether this process was started by an MPI launcher with more than one process (Open MPI's
+// OMPI_COMM_WORLD_SIZE, or the PMI_SIZE of MPICH and Slurm): then a run is distributed. Reads
+// the environment only; does not start MPI.
+bool launchedWithSeveralProcesses();
+
 class Communicator {
  public:
   // The processes mpirun started (MPI_COMM_WORLD); a lone process is a world of one.

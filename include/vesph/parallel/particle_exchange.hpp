@@ -59,6 +59,10 @@ class ParticleExchange {
   // source's in their previous order. Collective. Returns the particles this rank sent away.
   std::size_t migrate(ParticleSet<D>& p, std::span<const int> destination);
 
+  // Keeps the particles flagged (one flag per particle), in their order: the initial share of a
+  // rank that built the whole scene. Local.
+  void keepOnly(ParticleSet<D>& p, std::span<const char> keep);
+
   // Appends the halo: a copy of every particle another rank owns within `radius` of this
   // rank's box (boxes: every rank's, from the partition; radius: the neighbour search's cutoff
   // plus its skin, so that the halo holds until the next rebuild). Collective.

@@ -43,6 +43,9 @@ class IntegratedSystem final : public OdeSystem {
   bool afterStepChangesState() const override { return system_.afterStepChangesState(); }
   bool mayResize() const override { return system_.mayResize(); }
   bool resizePending() const override { return system_.resizePending(); }
+  bool resizeKeepsRates() const override { return system_.resizeKeepsRates(); }
+  void stashRates(const double* rate) override { system_.stashRates(rate); }
+  void takeRates(double* rate) const override { system_.takeRates(rate); }
   // The particles rearranged, the state packed at its new length; the last good state is the
   // rewritten one (same time).
   double* resizeState(double t, double* y) override {

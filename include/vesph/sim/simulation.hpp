@@ -103,6 +103,14 @@ class Simulation {
   void readOutputTimes(ConfigTable& root);
   ReferenceScales referenceScales(double inflow_speed) const;
   void readChecks(ConfigTable& root, double velocity_scale, bool removes_leaving);
+  void distribute();
+  // The whole scene's counts in a distributed run (the system holds one process's share).
+  struct WholeScene {
+    std::size_t particles = 0, moving = 0;
+    std::uint64_t ghosts = 0;
+    int processes = 1;
+    double imbalance = 1;
+  } whole_scene_;
 
   Config& config_;
   SceneHeader header_;

@@ -26,6 +26,8 @@ class StepChecks {
   static std::vector<std::string> hookColumns(const SphSystem<D>& system);
 
  private:
+  // The checks of this process's particles.
+  std::string localFailure(const SphSystem<D>& system, const DiagnosticsRow& row, const double* y) const;
   std::vector<double> hook_values_;
 };
 

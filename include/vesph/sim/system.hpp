@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "vesph/boundary/boundary.hpp"
+#include "vesph/core/distribution.hpp"
 #include "vesph/core/domain.hpp"
 #include "vesph/core/kernel.hpp"
 #include "vesph/core/neighbours.hpp"
@@ -41,10 +42,17 @@ class SphSystem final : public OdeSystem, public StateEvaluator {
   // Run after every accepted step, in order, before the effects' afterStep (the ISPH
   // projection, src/isph; inflow/outflow and domain exit, src/boundary).
   std::vector<std::unique_ptr<StepHook<D>>> hooks;
+  // A run across processes (docs/architecture.md "Distributed runs"); null in a serial run,
+  // which then runs exactly as before. Set by the scene, which calls distribute() once.
+  std::unique_ptr<ParticleDistribution<D>> distribution;
 
   // Sets up boundaries and effects (field requests, prerequisites) and sorts the effects
   // into their phases. Call once the particles exist.
   void setup(double spacing, double rest_density, double viscosity, double skin);
+  // With a distribution: keeps this process's share of the whole scene built by every process,
+  // with its halo, and rebuilds the neighbour list. Collective; after setup and before the
+  // state is packed.
+  void distribute();
 
   std::size_t size() const override;
   StateSegments segments() const override;
@@ -84,6 +92,12 @@ class SphSystem final : public OdeSystem, public StateEvaluator {
   // The system does not own the state vector: a scene whose particle count changes is
   // integrated through IntegratedSystem (the run's OdeState resizes); here a logic error.
   double* resizeState(double t, double* y) override;
+  // A distributed run's redistribution keeps the particles: the integrator's rates travel with
+  // them (OdeSystem::resizeKeepsRates), through a moving-range field that the halo refresh
+  // leaves out.
+  bool resizeKeepsRates() const override;
+  void stashRates(const double* rate) override;
+  void takeRates(double* rate) const override;
   // Between steps: y (the accepted, post-processed state) into the particle set, then every
   // hook's changes made (particles removed, buffer particles released), through one
   // ParticleRemap that the particle set, effects, boundaries, hooks and neighbour structures
@@ -118,7 +132,8 @@ class SphSystem final : public OdeSystem, public StateEvaluator {
     void add(Effect<D>* e);
   };
   void evaluateWith(const PhaseLists& lists, RhsPart part, double t, const double* y, double* ydot);
-  void particlePass(const std::vector<Effect<D>*>& list, const RhsContext<D>& ctx);
+  // The per-particle effects of a phase over the moving particles [0, n).
+  void particlePass(const std::vector<Effect<D>*>& list, const RhsContext<D>& ctx, std::size_t n);
   // remap_ applied to the particle set, effects, boundaries, hooks and the neighbour structures.
   void applyRemap();
   // The boundaries that move fixed particles (Boundary::movesFixed): placed at the time of
@@ -141,6 +156,7 @@ class SphSystem final : public OdeSystem, public StateEvaluator {
   double explicit_max_acceleration_ = 0;  // of the explicit part, at its last evaluation
   std::uint64_t rhs_evals_ = 0;
   bool last_evaluation_implicit_ = false;  // see StateEvaluator::lastEvaluationImplicit
+  bool redistribute_pending_ = false;      // a distributed run's halo must be rebuilt before the next step
   std::uint64_t next_id_ = 0;
   ParticleChanges changes_;
   ParticleRemap remap_;

@@ -133,6 +133,14 @@ class OdeSystem {
   virtual bool mayResize() const { return false; }
   virtual bool resizePending() const { return false; }
   virtual double* resizeState(double t, double* y) { return y; }
+  // A resize that only moves particles between the processes of a distributed run keeps every
+  // particle and its rates: the fixed-step integrators then carry their rate vector across it
+  // (stashRates before resizeState, takeRates after, both in the state's layout) instead of
+  // evaluating again, so that the run follows the serial one (the leapfrog's carried rate is not
+  // the rate at the state: src/time/leapfrog.cpp).
+  virtual bool resizeKeepsRates() const { return false; }
+  virtual void stashRates(const double* rate) {}
+  virtual void takeRates(double* rate) const {}
 };
 
 struct IntegratorStats {

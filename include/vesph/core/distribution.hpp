@@ -1,0 +1,60 @@
+#pragma once
+// What a run across processes asks of its particle distribution (docs/architecture.md
+// "Distributed runs"): the SPH system holds one (null in a serial run, which then runs exactly
+// as without it) and calls it at fixed points of the right-hand side and between steps; the
+// implementation lives in parallel/ (MPI, Zoltan), so nothing above core/ depends on MPI.
+//
+// The particle set of a process: [owned moving | ghost moving | owned fixed | ghost fixed]
+// (ParticleSet::n_ghost_moving, n_ghost_fixed); the ghosts are copies of particles that other
+// processes own within the neighbour search radius plus skin of this one's part of the domain.
+#include <cstdint>
+#include <span>
+#include <string>
+
+#include "vesph/core/particles.hpp"
+
+namespace vesph {
+
+template <int D>
+class ParticleDistribution {
+ public:
+  virtual ~ParticleDistribution() = default;
+
+  virtual int rank() const = 0;
+  virtual int size() const = 0;
+
+  // Once, with the whole scene on every process: keeps this process's share (a partition of
+  // the domain by weight) and appends its ghosts. Collective.
+  virtual void distribute(ParticleSet<D>& p) = 0;
+  // The owners' positions, velocities, densities and the given fields into the ghosts (after the
+  // state is unpacked). Collective.
+  virtual void refreshState(ParticleSet<D>& p, std::span<Field* const> evolving) = 0;
+  // The owners' velocities, densities and every field into the ghosts (after a phase that wrote
+  // per-particle values a later phase reads from neighbours). Collective.
+  virtual void refreshFields(ParticleSet<D>& p) = 0;
+  // Whether some owned particle moved so far since the halo was built that the halo may miss
+  // a neighbour before the next step ends, a step moving a particle by up to step_motion (m).
+  // Collective (every process gets the same answer).
+  virtual bool needsRedistribution(const ParticleSet<D>& p, double step_motion) = 0;
+  // Removes the ghosts, sends particles to their owners (repartitioning when the load has
+  // become uneven), and builds the halo again. Collective.
+  virtual void redistribute(ParticleSet<D>& p) = 0;
+  // The owned particles of every process on process 0, moving ones first, each group sorted by
+  // id (what a serial run's frame holds, in a fixed order); an empty set elsewhere. Collective.
+  virtual ParticleSet<D> gather(const ParticleSet<D>& p) = 0;
+
+  // Reductions over the processes.
+  virtual double sum(double local) = 0;
+  virtual double max(double local) = 0;
+  virtual std::uint64_t sum(std::uint64_t local) = 0;
+  // The first non-empty message in rank order (empty when every process's is). Collective.
+  virtual std::string firstMessage(const std::string& local) = 0;
+
+  // The largest process's share of the moving particles over the mean (1: even), at the last
+  // (re)distribution; the (re)distributions and the ghosts held, for the summary.
+  virtual double imbalance() const = 0;
+  virtual std::uint64_t redistributions() const = 0;
+  virtual std::uint64_t repartitions() const = 0;
+};
+
+}  // namespace vesph

@@ -1,0 +1,216 @@
+#include "vesph/parallel/mpi_distribution.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "vesph/parallel/particle_exchange.hpp"
+
+namespace vesph {
+
+namespace {
+
+// Walls cost a process less than fluid: they take part in the wall-value pass only.
+constexpr double kFixedParticleWeight = 0.25;
+
+template <int D>
+class MpiDistribution final : public ParticleDistribution<D> {
+ public:
+  MpiDistribution(const Domain<D>& domain, double cutoff, double skin, double tolerance)
+      : comm_(Communicator::world()), domain_(domain), partition_(comm_, domain), exchange_(comm_, domain),
+        gatherer_(comm_, domain), radius_(cutoff + skin), skin_(skin), tolerance_(tolerance) {
+    if (!(skin > 0))
+      throw std::invalid_argument("a distributed run needs a neighbour skin > 0 (neighbours.skin): the halo holds "
+                                  "until the particles have moved half of it");
+  }
+
+  int rank() const override { return comm_.rank(); }
+  int size() const override { return comm_.size(); }
+
+  void distribute(ParticleSet<D>& p) override {
+    // Every process built the whole scene: each hands Zoltan a disjoint share (particle k to
+    // process k mod size), then keeps the particles inside its box.
+    std::vector<double> share_x, share_w;
+    for (std::size_t i = static_cast<std::size_t>(rank()); i < p.size(); i += static_cast<std::size_t>(size())) {
+      for (int a = 0; a < D; ++a) share_x.push_back(p.position[D * i + a]);
+      share_w.push_back(i < p.n_moving ? 1.0 : kFixedParticleWeight);
+    }
+    partition_.partition(share_x, share_w);
+    ++repartitions_;
+    const std::uint64_t whole = p.size();
+    std::vector<char> keep(p.size());
+    for (std::size_t i = 0; i < p.size(); ++i) keep[i] = partition_.owner(p.position.data() + D * i) == rank();
+    exchange_.keepOnly(p, keep);
+    if (comm_.sum(static_cast<std::uint64_t>(p.size())) != whole)
+      throw std::logic_error("distribution: the shares do not add up to the scene");
+    buildHalo(p);
+  }
+
+  void refreshState(ParticleSet<D>& p, std::span<Field* const> evolving) override {
+    arrays_.clear();
+    arrays_.push_back({p.position.data(), D, Field::Range::all});
+    arrays_.push_back({p.velocity.data(), D, Field::Range::all});
+    arrays_.push_back({p.density.data(), 1, Field::Range::all});
+    for (Field* f : evolving) arrays_.push_back({f->data.data(), f->components, f->range});
+    exchange_.refresh(arrays_);
+  }
+
+  void refreshFields(ParticleSet<D>& p) override {
+    arrays_.clear();
+    arrays_.push_back({p.velocity.data(), D, Field::Range::all});
+    arrays_.push_back({p.density.data(), 1, Field::Range::all});
+    for (const auto& f : p.fields.all())
+      if (f->refreshed_in_halo) arrays_.push_back({f->data.data(), f->components, f->range});
+    exchange_.refresh(arrays_);
+  }
+
+  bool needsRedistribution(const ParticleSet<D>& p, double step_motion) override {
+    double worst2 = 0;
+    const std::size_t n = p.ownedMoving();
+    for (std::size_t i = 0; i < n; ++i) {
+      double d2 = 0;
+      for (int a = 0; a < D; ++a) {
+        const double d = domain_.image(a, p.position[D * i + a] - reference_[D * i + a]);
+        d2 += d * d;
+      }
+      worst2 = std::max(worst2, d2);
+    }
+    // A pair within the cutoff now was within cutoff + 2 d when the halo was built, d being the
+    // larger of the two displacements: the halo (cutoff + skin) holds while d < skin / 2, and it
+    // must hold until the next step has ended: twice the last step's motion is kept in reserve
+    // (the speed may grow within the step).
+    return comm_.max(std::sqrt(worst2)) > 0.5 * skin_ - 2.0 * step_motion;
+  }
+
+  void redistribute(ParticleSet<D>& p) override {
+    exchange_.removeHalo(p);
+    std::vector<int> destination(p.size());
+    if (loadImbalance(comm_, static_cast<double>(p.n_moving)) > tolerance_) {
+      destination = partition_.partition(p.position, weights(p));
+      ++repartitions_;
+    } else {
+      for (std::size_t i = 0; i < p.size(); ++i) destination[i] = partition_.owner(p.position.data() + D * i);
+    }
+    exchange_.migrate(p, destination);
+    ++redistributions_;
+    buildHalo(p);
+  }
+
+  ParticleSet<D> gather(const ParticleSet<D>& p) override {
+    ParticleSet<D> copy;
+    for (const auto& f : p.fields.all()) copy.fields.require(f->name, f->components, f->range).data = f->data;
+    copy.position = p.position;
+    copy.velocity = p.velocity;
+    copy.density = p.density;
+    copy.mass = p.mass;
+    copy.kind = p.kind;
+    copy.id = p.id;
+    copy.n_moving = p.n_moving;
+    // Drop the ghosts, send the owned particles to process 0, sort them there.
+    std::vector<char> owned(p.size(), 1);
+    std::fill(owned.begin() + static_cast<std::ptrdiff_t>(p.ownedMoving()), owned.begin() + static_cast<std::ptrdiff_t>(p.n_moving), 0);
+    std::fill(owned.begin() + static_cast<std::ptrdiff_t>(p.ownedEnd()), owned.end(), 0);
+    gatherer_.keepOnly(copy, owned);
+    const std::vector<int> to_root(copy.size(), 0);
+    gatherer_.migrate(copy, to_root);
+    sortById(copy);
+    return copy;
+  }
+
+  double sum(double local) override { return comm_.sum(local); }
+  double max(double local) override { return comm_.max(local); }
+  std::uint64_t sum(std::uint64_t local) override { return comm_.sum(local); }
+
+  std::string firstMessage(const std::string& local) override {
+    int mine = local.empty() ? size() : rank(), first = size();
+    MPI_Allreduce(&mine, &first, 1, MPI_INT, MPI_MIN, comm_.handle());
+    if (first == size()) return {};
+    std::uint64_t length = local.size();
+    MPI_Bcast(&length, 1, MPI_UINT64_T, first, comm_.handle());
+    std::string out = rank() == first ? local : std::string(length, ' ');
+    MPI_Bcast(out.data(), static_cast<int>(length), MPI_CHAR, first, comm_.handle());
+    return out;
+  }
+
+  double imbalance() const override { return imbalance_; }
+  std::uint64_t redistributions() const override { return redistributions_; }
+  std::uint64_t repartitions() const override { return repartitions_; }
+
+ private:
+  std::vector<double> weights(const ParticleSet<D>& p) const {
+    std::vector<double> w(p.size(), kFixedParticleWeight);
+    std::fill(w.begin(), w.begin() + static_cast<std::ptrdiff_t>(p.n_moving), 1.0);
+    return w;
+  }
+
+  void buildHalo(ParticleSet<D>& p) {
+    imbalance_ = loadImbalance(comm_, static_cast<double>(p.n_moving));
+    exchange_.buildHalo(p, partition_.boxes(), radius_);
+    reference_.assign(p.position.begin(), p.position.begin() + static_cast<std::ptrdiff_t>(D * p.ownedMoving()));
+  }
+
+  // Moving particles first, fixed ones after, each group by id.
+  static void sortById(ParticleSet<D>& p) {
+    std::vector<std::size_t> order(p.size());
+    std::iota(order.begin(), order.end(), std::size_t{0});
+    auto by_id = [&](std::size_t a, std::size_t b) { return p.id[a] < p.id[b]; };
+    std::sort(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(p.n_moving), by_id);
+    std::sort(order.begin() + static_cast<std::ptrdiff_t>(p.n_moving), order.end(), by_id);
+    permute(p, order);
+  }
+
+  static void permute(ParticleSet<D>& p, const std::vector<std::size_t>& order) {
+    auto apply = [&](auto& v, std::size_t c) {
+      auto out = v;
+      for (std::size_t t = 0; t < order.size(); ++t)
+        for (std::size_t k = 0; k < c; ++k) out[c * t + k] = v[c * order[t] + k];
+      v.swap(out);
+    };
+    apply(p.position, D);
+    apply(p.velocity, D);
+    apply(p.density, 1);
+    apply(p.mass, 1);
+    apply(p.kind, 1);
+    apply(p.id, 1);
+    for (const auto& f : p.fields.all()) {
+      const std::size_t c = static_cast<std::size_t>(f->components);
+      std::vector<double> out(f->data.size());
+      const std::size_t nm = p.n_moving;
+      for (std::size_t t = 0; t < order.size(); ++t) {
+        const bool moving = t < nm;  // order keeps the groups: a moving slot takes a moving particle
+        if (f->range == Field::Range::moving && !moving) continue;
+        if (f->range == Field::Range::fixed && moving) continue;
+        const std::size_t to = f->range == Field::Range::fixed ? t - nm : t;
+        const std::size_t from = f->range == Field::Range::fixed ? order[t] - nm : order[t];
+        std::copy_n(f->data.begin() + static_cast<std::ptrdiff_t>(c * from), c, out.begin() + static_cast<std::ptrdiff_t>(c * to));
+      }
+      f->data.swap(out);
+    }
+  }
+
+  Communicator comm_;
+  Domain<D> domain_;
+  SpacePartition<D> partition_;
+  ParticleExchange<D> exchange_, gatherer_;
+  double radius_, skin_, tolerance_;
+  std::vector<HaloArray> arrays_;
+  std::vector<double> reference_;
+  double imbalance_ = 1.0;
+  std::uint64_t redistributions_ = 0, repartitions_ = 0;
+};
+
+}  // namespace
+
+template <int D>
+std::unique_ptr<ParticleDistribution<D>> makeMpiDistribution(const Domain<D>& domain, double cutoff, double skin,
+                                                             double imbalance_tolerance) {
+  return std::make_unique<MpiDistribution<D>>(domain, cutoff, skin, imbalance_tolerance);
+}
+
+template std::unique_ptr<ParticleDistribution<2>> makeMpiDistribution<2>(const Domain<2>&, double, double, double);
+template std::unique_ptr<ParticleDistribution<3>> makeMpiDistribution<3>(const Domain<3>&, double, double, double);
+
+}  // namespace vesph

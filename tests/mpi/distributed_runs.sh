@@ -1,0 +1,57 @@
+# Runs across processes (issue 36, docs/user-guide.md "Runs across processes"): `mpiexec -n N
+# vesph run` against the serial run of the same scene, fixed steps, one OpenMP thread each; the
+# frames must hold the same particles and fields to 1e-9 of each dataset's largest magnitude
+# (round-off of sums taken in another order: measured 1e-12 to 1e-13), pressure against 1 mPa
+# where the fluid is at rest. $1 = vesph, $2 = source directory, $3 = mpiexec.
+#   - the dam break at the CI size (free surface, walls, gauges; particles migrate between the
+#     processes about every 14 steps) under 2 and 3 processes (3 does not divide the domain);
+#   - the Oldroyd-B start-up channel (periodic, the elastic stress evolving in the state) under 2;
+#   - the 3D Oldroyd-B drop (walls in 3D) under 4, oversubscribed;
+#   - the output of a distributed run is valid vesph-1 (HDF5 + XDMF) and summary.json names the
+#     processes and the redistributions;
+#   - what is not distributed yet is refused before the run (exit 2): moving walls, --resume.
+. "$(dirname "$0")/../cli/lib.sh"
+MPIEXEC=$3
+export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1 OMP_NUM_THREADS=1
+SAME="$SRC/tools/vesph-post same_run_check --atol pressure=1e-3"
+
+# same NAME SCENE RANKS SETTINGS...: the serial run (once per NAME) and the run on RANKS processes.
+same() {
+  name=$1; scene=$2; ranks=$3; shift 3
+  stem=$(basename "$scene" .toml)
+  if [ ! -d "$WORK/$name.serial" ]; then
+    expect 0 "ok: finished" -- "$VESPH" run "$scene" -o "$WORK/$name.serial" --quiet "$@"
+  fi
+  expect 0 "ok: finished" -- "$MPIEXEC" -n "$ranks" "$VESPH" run "$scene" -o "$WORK/$name.np$ranks" --quiet "$@"
+  $SAME "$WORK/$name.serial/$stem.h5" "$WORK/$name.np$ranks/$stem.h5" >"$WORK/$name.$ranks.log" 2>&1 && pass ||
+    fail "$name on $ranks processes differs from the serial run: $(grep -E 'above|error' "$WORK/$name.$ranks.log" | head -5)"
+  tail -1 "$WORK/$name.$ranks.log" | sed "s/^/$name, $ranks processes: /"
+}
+
+DAM=$SRC/cases/dam_break_2d.toml
+DAM_CI="--set particles.spacing=0.04 --set blocks[1].min=[-0.12,-0.12] --set blocks[1].max=[4.12,0.0]
+        --set blocks[2].min=[-0.12,0.0] --set blocks[3].max=[4.12,3.0] --set output.interval=0.05 --set time.end=0.2"
+# shellcheck disable=SC2086
+same dam "$DAM" 2 $DAM_CI
+# shellcheck disable=SC2086
+same dam "$DAM" 3 $DAM_CI
+$PY "$SRC/tools/check_output.py" "$WORK/dam.np2" >"$WORK/check.log" 2>&1 && pass ||
+  fail "distributed output not valid: $(tail -3 "$WORK/check.log")"
+$PY - "$WORK/dam.np3/summary.json" >"$WORK/summary.log" 2>&1 <<'PYEOF' && pass || fail "summary: $(tail -3 "$WORK/summary.log")"
+import json, sys
+s = json.load(open(sys.argv[1]))
+assert s["processes"] == 3, s.get("processes")
+assert s["redistributions"] >= 1, s["redistributions"]
+assert s["fluid_particles"] == 1250, s["fluid_particles"]
+assert 1.0 <= s["load_imbalance"] < 1.2, s["load_imbalance"]
+print("redistributions", s["redistributions"], "load imbalance", s["load_imbalance"])
+PYEOF
+cat "$WORK/summary.log"
+
+same channel "$SRC/cases/startup_channel_oldroyd_b.toml" 2 --set time.end=0.1 --set output.interval=0.05
+same drop3d "$SRC/cases/drop_3d_oldroyd_b.toml" 4 --set time.end=0.004 --set output.interval=0.002
+
+expect 2 "does not support yet.*moving walls" -- "$MPIEXEC" -n 2 "$VESPH" run "$SRC/cases/couette_startup.toml" -o "$WORK/couette" --quiet
+# shellcheck disable=SC2086
+expect 2 "resume.*across processes" -- "$MPIEXEC" -n 2 "$VESPH" run "$DAM" -o "$WORK/dam.np2" --quiet --resume $DAM_CI
+finish
