@@ -7,6 +7,7 @@
 // [effects.velocity_gradient], so dv/dt is the viscous force alone.
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <numbers>
@@ -153,6 +154,79 @@ TEST_CASE("viscosity: fluid turning rigidly with a turning rod: wall_stress = co
   CHECK(renormalised < 1e-10);
 }
 
+TEST_CASE("viscosity: wall_stress = continued_where_full is continued in a full kernel, omitted where a surface cuts it") {
+  // The rigidly turning fluid around a turning rod of the test above. "continued_where_full"
+  // scales the continued wall terms by f = clamp((S - 0.85)/0.12, 0, 1), S = sum_j V_j W_ij over
+  // fluid, walls and the particle itself. (1) In the wide annulus (R = 20 dx) every particle at
+  // r < 10 dx has a full lattice kernel (S = 1), so f = 1 and the rotation gives no force, as
+  // with "continued" (the default "omitted" leaves a drag there). (2) In a film two rows thick
+  // (R = 6 dx) the outer free surface cuts every kernel: each particle's force is
+  // omitted + f(S) (continued - omitted), with S summed here by brute force, and where S < 0.85
+  // next to the rod the wall term is absent (the result is "omitted"'s). Both parts need the
+  // kernel value W in the viscosity's pair pass (needsKernelValue): without it S is the self
+  // term alone and f = 0 everywhere.
+  const double dx = 0.01, a = 4 * dx, Omega = 0.5;
+  const double scale = kMu / kRho0 * Omega * 20 * dx / (1.6 * dx * 1.6 * dx);  // nu Omega R / h^2, R = 20 dx
+  auto build = [&](const std::string& effects, double R) {
+    auto b = std::make_unique<Box<2>>(effects, dx, 1.6, KernelType::quintic, 2 * R, false);
+    b->viscosity = kMu;
+    b->annulusAroundRod(a, R, [&](const Vec<2>& x) { return Vec<2>(-Omega * x[1], Omega * x[0]); });
+    b->finish();
+    b->evaluate();
+    return b;
+  };
+  const std::string continued = kStress + "wall_stress = \"continued\"\n";
+  const std::string where_full = kStress + "wall_stress = \"continued_where_full\"\n";
+
+  // (1) The full kernels beside the rod.
+  {
+    const auto omitted = build(kStress, 20 * dx), blended = build(where_full, 20 * dx);
+    double worst_omitted = 0, worst_blended = 0;
+    for (std::size_t i = 0; i < blended->n(); ++i)
+      if (blended->sys.particles.x(i).norm() < 10 * dx) {
+        worst_omitted = std::max(worst_omitted, omitted->dvdt(i).norm() / scale);
+        worst_blended = std::max(worst_blended, blended->dvdt(i).norm() / scale);
+      }
+    MESSAGE("largest |dv/dt| / (nu Omega R / h^2) for r < 10 dx: omitted " << worst_omitted
+                                                                          << ", continued_where_full " << worst_blended);
+    CHECK(worst_omitted > 0.05);
+    CHECK(worst_blended < 1e-10);
+  }
+
+  // (2) The film on the rod: every kernel cut by the free surface (S from 0.55 to 0.91 measured).
+  const auto omitted = build(kStress, 6 * dx), full = build(continued, 6 * dx), blended = build(where_full, 6 * dx);
+  const ParticleSet<2>& p = blended->sys.particles;
+  const Kernel& kernel = blended->sys.kernel;
+  int cut_beside_wall = 0, partial = 0, mismatched = 0;
+  double smallest = 1e300, largest = 0;
+  for (std::size_t i = 0; i < blended->n(); ++i) {
+    double S = 0;
+    bool wall_neighbour = false;
+    for (std::size_t j = 0; j < p.size(); ++j) {
+      const double r = (p.x(i) - p.x(j)).norm();
+      if (r >= kernel.supportRadius()) continue;
+      S += p.mass[j] / p.density[j] * kernel.W(r);
+      wall_neighbour = wall_neighbour || j >= p.n_moving;
+    }
+    smallest = std::min(smallest, S);
+    largest = std::max(largest, S);
+    const double f = std::clamp((S - 0.85) / 0.12, 0.0, 1.0);
+    const Vec<2> wall_term = full->dvdt(i) - omitted->dvdt(i);
+    const Vec<2> expected = omitted->dvdt(i) + f * wall_term;
+    if ((blended->dvdt(i) - expected).norm() > 1e-9 * scale) ++mismatched;
+    if (wall_neighbour && S < 0.85) {
+      CHECK((blended->dvdt(i) - omitted->dvdt(i)).norm() < 1e-12 * scale);
+      if (wall_term.norm() > 0.01 * scale) ++cut_beside_wall;  // a wall term there to leave out
+    }
+    if (wall_neighbour && f > 0 && f < 1) ++partial;
+  }
+  MESSAGE("film on the rod: S from " << smallest << " to " << largest << ", " << cut_beside_wall
+                                    << " particles with S < 0.85 and a wall term over 0.01 nu Omega R / h^2, " << partial << " blended in part");
+  CHECK(mismatched == 0);
+  CHECK(cut_beside_wall >= 8);
+  CHECK(partial >= 4);  // and some rows take the continuation in part (0.85 < S < 0.97)
+}
+
 TEST_CASE("viscosity: form keys are checked") {
   auto setupOf = [](const std::string& effects) {
     build(effects, 0.1, 1.0, false, {{Vec<2>(0.0, 0.0), Vec<2>::Zero()}, {Vec<2>(0.1, 0.0), Vec<2>::Zero()}});
@@ -161,7 +235,7 @@ TEST_CASE("viscosity: form keys are checked") {
                        doctest::Contains("needs the velocity gradient: add [effects.velocity_gradient]"), InputError);
   CHECK_THROWS_WITH_AS(setupOf("[effects.viscosity]\nwall_stress = \"continued\"\n"),
                        doctest::Contains("applies to the stress form"), InputError);
-  CHECK_THROWS_WITH_AS(setupOf(kStress + "wall_stress = \"mirrored\"\n"), doctest::Contains("omitted, continued"),
+  CHECK_THROWS_WITH_AS(setupOf(kStress + "wall_stress = \"mirrored\"\n"), doctest::Contains("omitted, continued, continued_where_full"),
                        InputError);
   CHECK_THROWS_WITH_AS(setupOf("[effects.viscosity]\nform = \"tensor\"\n"), doctest::Contains("laplacian, stress"),
                        InputError);

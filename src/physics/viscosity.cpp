@@ -33,6 +33,17 @@
 // constant continuation into the wall), which removes that term where the walls fill the kernel
 // but, at a die's lip (wall, free surface and the lip's large kappa in one kernel), peels the
 // extrudate's surface rows off (theory §5.4, measured).
+// wall_stress = "continued_where_full" applies that continuation only where fluid and walls fill
+// the kernel: the wall terms are summed apart and scaled by f = clamp((S - 0.85)/0.12, 0, 1),
+// S = sum_j V_j W_ij over fluid and wall neighbours and the particle itself (the Shepard sum,
+// V_j = m_j/rho_j; 1 in a full kernel). Beside a wall the fluid covers (a rod, a die's inner
+// rows) it is "continued"; where a free surface cuts the kernel as well (the lip's surface rows,
+// whose continued term 2 mu kappa_i^T sum_wall V_j grad W has nothing on the free side to balance
+// it) it is "omitted", with a linear blend between (docs/notes/die_swell.md, session 13 and 14).
+// Only this option asks the pair driver for the kernel value W (needsKernelValue).
+#include <algorithm>
+#include <string>
+
 #include "vesph/physics/constitutive.hpp"  // Mat<D>
 #include "vesph/physics/registry.hpp"
 
@@ -45,7 +56,13 @@ struct TransposedStressOf {
   Mat<D> i_over_rho2;    // mu kappa_i^T / rho_i^2
   double rho_i2;         // rho_i^2: a continued wall neighbour carries mu kappa_i^T = i_over_rho2 rho_i^2
   const double* kappa;   // the velocity gradients (row-major D x D); null: the term is left out
+  // wall_stress = "continued_where_full" only: the continued wall terms, summed apart, and the
+  // Shepard sum S that scales them in end().
+  Vec<D> wall_acc;
+  double shepard;
 };
+
+enum class WallStress { omitted, continued, continued_where_full };
 
 // The form is a template argument: the Laplacian's pair loop carries nothing of the stress form
 // (a run-time switch cost 4 % of the Poiseuille scene's pair rate).
@@ -54,7 +71,11 @@ class Viscosity final : public PairEffect<D, Viscosity<D, StressForm>> {
  public:
   explicit Viscosity(ConfigTable& cfg) {
     if constexpr (StressForm) {
-      wall_continued_ = cfg.choice("wall_stress", "omitted", {"omitted", "continued"}) == "continued";
+      const std::string w =
+          cfg.choice("wall_stress", "omitted", {"omitted", "continued", "continued_where_full"});
+      wall_stress_ = w == "continued"              ? WallStress::continued
+                     : w == "continued_where_full" ? WallStress::continued_where_full
+                                                   : WallStress::omitted;
     } else if (cfg.has("wall_stress")) {
       throw InputError("effects.viscosity.wall_stress applies to the stress form's kappa^T sum: set form = \"stress\" "
                        "or remove it");
@@ -63,6 +84,8 @@ class Viscosity final : public PairEffect<D, Viscosity<D, StressForm>> {
   std::string_view name() const override { return "viscosity"; }
   Phase phase() const override { return Phase::forces; }
   std::string_view form() const override { return StressForm ? "stress" : "laplacian"; }
+  // The Shepard sum of "continued_where_full" reads W; the other options do not pay for it.
+  bool needsKernelValue() const override { return blended(); }
 
   void setup(Setup<D>& s) override {
     // fluid.viscosity defaults to 0 (an inviscid scene needs none): this term needs it set.
@@ -146,13 +169,16 @@ class Viscosity final : public PairEffect<D, Viscosity<D, StressForm>> {
       // is whole).
       Local l{Vec<D>::Zero(), Vec<D>::Ones(), 2.0 * mu_ / p.density[i], zero_velocity_.data(), p.density.data(),
               p.mass.data(), zero_velocity_.data(), 0, {}};
-      if constexpr (StressForm) l.transposed = {Mat<D>::Zero(), 0.0, nullptr};
+      if constexpr (StressForm) l.transposed = {Mat<D>::Zero(), 0.0, nullptr, Vec<D>::Zero(), 0.0};
       return l;
     }
     Local l{Vec<D>::Zero(), p.v(i), 2.0 * mu_ / p.density[i], p.velocity.data(), p.density.data(), p.mass.data(), fv, fixed0, {}};
     if constexpr (StressForm) {
       const double rho = p.density[i];
-      l.transposed = {transposedStress(kappa_->data.data(), i) / (rho * rho), rho * rho, kappa_->data.data()};
+      // The Shepard sum starts with the self term V_i W(0): the pair loop skips r = 0.
+      const double self = blended() ? p.mass[i] / rho * ctx.kernel.W(0.0) : 0.0;
+      l.transposed = {transposedStress(kappa_->data.data(), i) / (rho * rho), rho * rho, kappa_->data.data(),
+                      Vec<D>::Zero(), self};
     }
     return l;
   }
@@ -162,6 +188,7 @@ class Viscosity final : public PairEffect<D, Viscosity<D, StressForm>> {
     if constexpr (StressForm) {  // eq. (3.18) on mu kappa^T; grad_i W_ij = F_ij r_ij
       if (!l.transposed.kappa) return;  // the Jacobian's diagonal: the Laplacian's only
       const double inv_rho = 1.0 / l.rho[nb.j];
+      if (blended()) l.transposed.shepard += l.m[nb.j] * inv_rho * nb.W;
       l.acc += (l.m[nb.j] * nb.F) *
                ((l.transposed.i_over_rho2 + transposedStress(l.transposed.kappa, nb.j) * (inv_rho * inv_rho)) * nb.rij);
     }
@@ -170,12 +197,27 @@ class Viscosity final : public PairEffect<D, Viscosity<D, StressForm>> {
     const double w = weight(nb, l);
     for (int a = 0; a < D; ++a) l.acc[a] += w * (l.vi[a] - l.fixed_velocity[D * (nb.j - l.fixed0) + a]);
     if constexpr (StressForm) {  // eq. (3.18) with the wall's mu kappa^T continued as mu kappa_i^T
-      if (!wall_continued_ || !l.transposed.kappa) return;
+      if (wall_stress_ == WallStress::omitted || !l.transposed.kappa) return;
       const double inv_rho = 1.0 / l.rho[nb.j];
-      l.acc += (l.m[nb.j] * nb.F * (1.0 + l.transposed.rho_i2 * inv_rho * inv_rho)) * (l.transposed.i_over_rho2 * nb.rij);
+      const Vec<D> term =
+          (l.m[nb.j] * nb.F * (1.0 + l.transposed.rho_i2 * inv_rho * inv_rho)) * (l.transposed.i_over_rho2 * nb.rij);
+      if (blended()) {
+        l.transposed.shepard += l.m[nb.j] * inv_rho * nb.W;
+        l.transposed.wall_acc += term;
+      } else {
+        l.acc += term;
+      }
     }
   }
   void end(const RhsContext<D>& ctx, Index i, Local& l) const {
+    if constexpr (StressForm) {
+      if (blended() && l.transposed.kappa) {
+        // Full kernel (S >= 0.97): the whole continuation; cut by a free surface (S <= 0.85):
+        // none, the wall acts as in "omitted"; linear between.
+        const double f = std::clamp((l.transposed.shepard - kFullFrom) / kFullWidth, 0.0, 1.0);
+        l.acc += f * l.transposed.wall_acc;
+      }
+    }
     for (int a = 0; a < D; ++a) ctx.dvdt[D * i + a] += l.acc[a];
   }
 
@@ -189,8 +231,16 @@ class Viscosity final : public PairEffect<D, Viscosity<D, StressForm>> {
     return mu_ * Eigen::Map<const Mat<D>>(kappa + D * D * j);
   }
 
+  bool blended() const {
+    if constexpr (StressForm) return wall_stress_ == WallStress::continued_where_full;
+    return false;
+  }
+  // "continued_where_full": f = clamp((S - kFullFrom) / kFullWidth, 0, 1). A lattice row at a
+  // flat free surface has S near 0.5 to 0.6, a full lattice kernel S = 1 within a few per mille.
+  static constexpr double kFullFrom = 0.85, kFullWidth = 0.12;
+
   const Field* kappa_ = nullptr;
-  bool wall_continued_ = false;  // wall_stress = "continued" (the stress form)
+  WallStress wall_stress_ = WallStress::omitted;  // the stress form's wall neighbours in the kappa^T sum
   double mu_ = 0, nu_ = 0;
   const Field* wall_velocity_ = nullptr;
   std::vector<double> zero_velocity_;  // all neighbour velocities, for the Jacobian's diagonal
