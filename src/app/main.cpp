@@ -62,6 +62,7 @@ int runScene(Config& cfg, const SceneHeader& h, const std::string& out_dir, bool
 template <int D>
 int checkScene(Config& cfg, const SceneHeader& h) {
   Simulation<D> sim(cfg, h);
+  if (sim.system().distribution && sim.system().distribution->rank() != 0) return 0;  // process 0 speaks
   std::cout << sim.describe() << sim.describeBlocks() << cfg.resolvedToml() << "\n";
   return 0;
 }

@@ -139,6 +139,18 @@ class MpiDistribution final : public ParticleDistribution<D> {
   std::uint64_t redistributions() const override { return redistributions_; }
   std::uint64_t repartitions() const override { return repartitions_; }
 
+  DistributionCounters counters() override {
+    const HaloCounters& h = exchange_.counters();
+    DistributionCounters c;
+    c.ghosts = comm_.sum(static_cast<std::uint64_t>(h.ghosts_received));
+    c.neighbour_links = comm_.sum(static_cast<std::uint64_t>(h.neighbour_ranks));
+    c.refreshes = h.refreshes;
+    c.messages = comm_.sum(h.messages_sent);
+    c.bytes = comm_.sum(h.bytes_sent);
+    c.migrated = comm_.sum(h.particles_migrated);
+    return c;
+  }
+
  private:
   std::vector<double> weights(const ParticleSet<D>& p) const {
     std::vector<double> w(p.size(), kFixedParticleWeight);

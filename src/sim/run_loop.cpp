@@ -64,6 +64,7 @@ class RunLoop final : public StepObserver {
   std::string failure_;
   Progress progress_;
   double last_frame_time_ = -1;
+  bool interrupted_ = false;  // some process was interrupted (accepted() stopped the run)
   IntegratedSystem<D> ode_;
 };
 
@@ -190,7 +191,13 @@ bool RunLoop<D>::accepted(double t, double dt, const double* y) {
   pending_.push_back(row);
   sim_.state_.keepGood(t, y);
   if (opt_.progress && root_) progress_.update(t, steps_, dt);
-  if (interruptRequested()) return false;
+  // A run across processes stops on every process when one was interrupted (mpiexec passes the
+  // signal on, but it need not arrive between the same two steps everywhere).
+  const bool interrupted = distribution_ ? distribution_->max(interruptRequested() ? 1.0 : 0.0) > 0 : interruptRequested();
+  if (interrupted) {
+    interrupted_ = true;
+    return false;
+  }
   if (opt_.max_steps && steps_ >= opt_.max_steps) return false;
   return true;
 }
@@ -224,7 +231,7 @@ void RunLoop<D>::integrate(RunStatus& status, std::string& message) {
   if (!failure_.empty()) {
     status = RunStatus::diverged;
     message = failure_;
-  } else if (interruptRequested()) {
+  } else if (interrupted_ || (!distribution_ && interruptRequested())) {
     status = RunStatus::interrupted;
     message = "interrupted at t = " + std::to_string(integrator.time()) + " s; the current state is the last frame";
     writeFrame(integrator.time());
@@ -319,6 +326,13 @@ nlohmann::json RunLoop<D>::summary(const RunReport& report) {
     s["redistributions"] = distribution_->redistributions();
     s["repartitions"] = distribution_->repartitions();
     s["load_imbalance"] = distribution_->imbalance();
+    const DistributionCounters c = distribution_->counters();
+    s["distribution"] = {{"ghosts", c.ghosts},
+                         {"neighbour_links", c.neighbour_links},
+                         {"halo_refreshes", c.refreshes},
+                         {"halo_messages", c.messages},
+                         {"halo_bytes", c.bytes},
+                         {"particles_migrated", c.migrated}};
   } else {
     s["particles"] = sys.particles.size();
     s["fluid_particles"] = sys.particles.n_moving;

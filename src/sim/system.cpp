@@ -90,6 +90,20 @@ template <int D>
 void SphSystem<D>::distribute() {
   if (!distribution) return;
   distribution->distribute(particles);
+  afterRedistribution();
+}
+
+// A distributed scene keeps no particle index anywhere (Simulation::distribute refuses what
+// does), so the effects and boundaries only see a set of a new size.
+template <int D>
+void SphSystem<D>::afterRedistribution() {
+  remap_.old_size = particles.size();
+  remap_.old_moving = particles.n_moving;
+  remap_.source.resize(particles.n_moving);
+  for (std::size_t i = 0; i < particles.n_moving; ++i) remap_.source[i] = static_cast<Index>(i);
+  remap_.released_ids.clear();
+  for (auto& e : effects) e->resized(particles, remap_);
+  for (auto& b : boundaries) b->resized(remap_);
   neighbours.update(particles, true);
   driver.prepare(neighbours);
 }
@@ -437,21 +451,10 @@ bool SphSystem<D>::resizePending() const {
 template <int D>
 void SphSystem<D>::rearrangeParticles(const double* y) {
   unpack(y);  // the particle set holds the accepted (and post-processed) state
-  if (distribution) {
-    // The particles go to their owners and the halo is rebuilt. A distributed scene keeps no
-    // particle index anywhere (the scene refuses what does: core/distribution.hpp), so the
-    // effects and boundaries only see a set of a new size.
+  if (distribution) {  // the particles go to their owners, the halo is built again
     distribution->redistribute(particles);
     redistribute_pending_ = false;
-    remap_.old_size = particles.size();
-    remap_.old_moving = particles.n_moving;
-    remap_.source.resize(particles.n_moving);
-    for (std::size_t i = 0; i < particles.n_moving; ++i) remap_.source[i] = static_cast<Index>(i);
-    remap_.released_ids.clear();
-    for (auto& e : effects) e->resized(particles, remap_);
-    for (auto& b : boundaries) b->resized(remap_);
-    neighbours.update(particles, true);
-    driver.prepare(neighbours);
+    afterRedistribution();
     return;
   }
   changes_.remove.clear();

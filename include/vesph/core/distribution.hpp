@@ -15,6 +15,17 @@
 
 namespace vesph {
 
+// What the distribution cost, summed over the processes (summary.json "distribution"; the
+// communication model of docs/performance.md is checked against it).
+struct DistributionCounters {
+  std::uint64_t ghosts = 0;           // ghost particles held at the last halo build
+  std::uint64_t neighbour_links = 0;  // (process, neighbour process) pairs exchanging halos
+  std::uint64_t refreshes = 0;        // halo refreshes (per process: every process makes each)
+  std::uint64_t messages = 0;         // their point-to-point messages
+  std::uint64_t bytes = 0;            // their payload
+  std::uint64_t migrated = 0;         // particles that changed owner
+};
+
 template <int D>
 class ParticleDistribution {
  public:
@@ -55,6 +66,8 @@ class ParticleDistribution {
   virtual double imbalance() const = 0;
   virtual std::uint64_t redistributions() const = 0;
   virtual std::uint64_t repartitions() const = 0;
+  // Collective.
+  virtual DistributionCounters counters() = 0;
 };
 
 }  // namespace vesph

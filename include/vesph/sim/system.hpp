@@ -136,6 +136,9 @@ class SphSystem final : public OdeSystem, public StateEvaluator {
   void particlePass(const std::vector<Effect<D>*>& list, const RhsContext<D>& ctx, std::size_t n);
   // remap_ applied to the particle set, effects, boundaries, hooks and the neighbour structures.
   void applyRemap();
+  // After a distributed run's (re)distribution: effects, boundaries and the neighbour list
+  // follow the new particle set.
+  void afterRedistribution();
   // The boundaries that move fixed particles (Boundary::movesFixed): placed at the time of
   // every evaluation and of every accepted step.
   void placeFixed(double t) {
