@@ -29,6 +29,7 @@ class MpiDistribution final : public ParticleDistribution<D> {
 
   int rank() const override { return comm_.rank(); }
   int size() const override { return comm_.size(); }
+  const void* communicator() const override { return &handle_; }
 
   void distribute(ParticleSet<D>& p) override {
     // Every process built the whole scene: each hands Zoltan a disjoint share (particle k to
@@ -204,6 +205,7 @@ class MpiDistribution final : public ParticleDistribution<D> {
   }
 
   Communicator comm_;
+  MPI_Comm handle_ = comm_.handle();
   Domain<D> domain_;
   SpacePartition<D> partition_;
   ParticleExchange<D> exchange_, gatherer_;

@@ -137,8 +137,10 @@ void Simulation<D>::distribute() {
     if (e->name() == "second_order_fluid" || e->name() == "particle_shifting")
       missing.push_back("the effect " + std::string(e->name()) + " (it carries per-particle values between steps)");
   const std::string& integ = integrator_name_;
-  if (integ.rfind("leapfrog", 0) != 0 && integ.rfind("midpoint", 0) != 0 && integ.rfind("symplectic", 0) != 0)
-    missing.push_back("the integrator " + integ + " (leapfrog, midpoint and symplectic run distributed)");
+  const bool distributed_integrator = integ == "leapfrog" || integ == "midpoint" || integ == "symplectic" ||
+                                      integ == "arkode" || integ == "arkode-fixed";
+  if (!distributed_integrator)
+    missing.push_back("the integrator " + integ + " (leapfrog, midpoint, symplectic, arkode and arkode-fixed run distributed)");
   if (!missing.empty()) {
     std::string what = config_.file() + ": a run across processes (mpirun -np N, N > 1) does not support yet (issue 36): ";
     for (std::size_t k = 0; k < missing.size(); ++k) what += (k ? "; " : "") + missing[k];

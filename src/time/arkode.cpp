@@ -15,6 +15,7 @@
 // wrong right-hand side for some tables it wrongly takes as first-same-as-last): with a
 // post-process function ERKStep always recomputes the first stage.
 #include <arkode/arkode_erkstep.h>
+#include <nvector/nvector_mpiplusx.h>
 #include <nvector/nvector_openmp.h>
 #include <nvector/nvector_serial.h>
 #include <omp.h>
@@ -30,7 +31,7 @@
 
 namespace vesph {
 
-N_Vector wrapState(double* y, std::size_t size, SUNContext context) {
+N_Vector wrapState(double* y, std::size_t size, SUNContext context, const void* communicator) {
   const sunindextype n = static_cast<sunindextype>(size);
   const int threads = omp_get_max_threads();
   N_Vector v;
@@ -42,7 +43,20 @@ N_Vector wrapState(double* y, std::size_t size, SUNContext context) {
     N_VEnableFusedOps_Serial(v, SUNTRUE);
   }
   if (!v) throw std::runtime_error("N_VMake failed");
+  if (communicator) {
+    N_Vector whole = N_VMake_MPIPlusX(*static_cast<const MPI_Comm*>(communicator), v, context);
+    if (!whole) throw std::runtime_error("N_VMake_MPIPlusX failed");
+    return whole;
+  }
   return v;
+}
+
+void destroyState(N_Vector v) {
+  if (!v) return;
+  // An MPIPlusX vector made over a local one does not own it.
+  N_Vector local = N_VGetVectorID(v) == SUNDIALS_NVEC_MPIPLUSX ? N_VGetLocalVector_MPIPlusX(v) : nullptr;
+  N_VDestroy(v);
+  if (local) N_VDestroy(local);
 }
 
 void fillTolerances(double* a, std::size_t nn, const StateSegments& s, const std::vector<double>& by_segment) {
@@ -122,7 +136,7 @@ class ArkodeErk final : public Integrator {
   }
   ~ArkodeErk() override {
     if (mem_) ERKStepFree(&mem_);
-    if (y_) N_VDestroy(y_);
+    destroyState(y_);
     if (atol_) N_VDestroy(atol_);
     if (sunctx_) SUNContext_Free(&sunctx_);
   }
@@ -212,7 +226,7 @@ class ArkodeErk final : public Integrator {
 
   // N_Vector over the system's state buffer (no copy): the OpenMP vector with fused operations
   // for large states when threads are available.
-  N_Vector wrap(double* y) { return wrapState(y, sys_->size(), sunctx_); }
+  N_Vector wrap(double* y) { return wrapState(y, sys_->size(), sunctx_, sys_->stateCommunicator()); }
 
   // Per-field absolute tolerances (vector abstol) over the state segments.
   void setTolerances() {
@@ -230,7 +244,7 @@ class ArkodeErk final : public Integrator {
     double* y = sys_->resizeState(t_, N_VGetArrayPointer(y_));
     N_Vector fresh = wrap(y);
     checkArkode(ERKStepResize(mem_, fresh, 1.0, t_, nullptr, nullptr), "Resize");
-    N_VDestroy(y_);
+    destroyState(y_);
     y_ = fresh;
     if (adaptive_) setTolerances();
     checkArkode(ERKStepSetStopTime(mem_, tout), "SetStopTime");

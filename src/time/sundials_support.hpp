@@ -17,7 +17,10 @@ namespace vesph {
 
 // N_Vector over the state buffer y of n values (no copy): the OpenMP vector with fused
 // operations for large states when threads are available, else the serial one.
-N_Vector wrapState(double* y, std::size_t n, SUNContext context);
+// In a run across processes (communicator: OdeSystem::stateCommunicator) it is the local part
+// of an MPIPlusX vector, whose norms span every process. Destroy it with destroyState.
+N_Vector wrapState(double* y, std::size_t n, SUNContext context, const void* communicator = nullptr);
+void destroyState(N_Vector v);
 
 // The relative tolerance and the absolute tolerance of each field of the state (position,
 // density, velocity, evolving fields), from [integrator] rtol, atol_* and reference_velocity.

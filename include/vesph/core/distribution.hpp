@@ -33,6 +33,8 @@ class ParticleDistribution {
 
   virtual int rank() const = 0;
   virtual int size() const = 0;
+  // The MPI communicator of the processes (points to an MPI_Comm; OdeSystem::stateCommunicator).
+  virtual const void* communicator() const = 0;
 
   // Once, with the whole scene on every process: keeps this process's share (a partition of
   // the domain by weight) and appends its ghosts. Collective.

@@ -43,6 +43,7 @@ class IntegratedSystem final : public OdeSystem {
   bool afterStepChangesState() const override { return system_.afterStepChangesState(); }
   bool mayResize() const override { return system_.mayResize(); }
   bool resizePending() const override { return system_.resizePending(); }
+  const void* stateCommunicator() const override { return system_.stateCommunicator(); }
   bool resizeKeepsRates() const override { return system_.resizeKeepsRates(); }
   void stashRates(const double* rate) override { system_.stashRates(rate); }
   void takeRates(double* rate) const override { system_.takeRates(rate); }

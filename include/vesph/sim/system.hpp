@@ -96,6 +96,7 @@ class SphSystem final : public OdeSystem, public StateEvaluator {
   // them (OdeSystem::resizeKeepsRates), through a moving-range field that the halo refresh
   // leaves out.
   bool resizeKeepsRates() const override;
+  const void* stateCommunicator() const override { return distribution ? distribution->communicator() : nullptr; }
   void stashRates(const double* rate) override;
   void takeRates(double* rate) const override;
   // Between steps: y (the accepted, post-processed state) into the particle set, then every

@@ -131,6 +131,10 @@ class OdeSystem {
   // projection: the fixed-step ones evaluate the right-hand side again, ARKODE resizes
   // (ERKStepResize) and sets its vector tolerances again.
   virtual bool mayResize() const { return false; }
+  // A run across processes: the state is this process's part of a vector distributed over the
+  // MPI communicator this points to (an MPI_Comm), and norms and dot products must span every
+  // part (ARKODE's error control: the MPIPlusX vector). Null in a serial run.
+  virtual const void* stateCommunicator() const { return nullptr; }
   virtual bool resizePending() const { return false; }
   virtual double* resizeState(double t, double* y) { return y; }
   // A resize that only moves particles between the processes of a distributed run keeps every
