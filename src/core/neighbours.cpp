@@ -43,19 +43,23 @@ int NeighbourList<D>::cellCoord(int a, double x) const {
 }
 
 template <int D>
-double NeighbourList<D>::maxDisplacement(const ParticleSet<D>& p) const {
+double largestDisplacement(const Domain<D>& domain, const double* now, const double* reference, std::size_t n) {
   double m2 = 0;
-  const std::size_t n = track_fixed_ ? p.size() : p.n_moving;
 #pragma omp parallel for reduction(max : m2) schedule(static) if (n >= kParallelMinimum)
   for (std::size_t i = 0; i < n; ++i) {
     double d2 = 0;
     for (int a = 0; a < D; ++a) {
-      const double d = domain_.image(a, p.position[D * i + a] - reference_[D * i + a]);
+      const double d = domain.image(a, now[D * i + a] - reference[D * i + a]);
       d2 += d * d;
     }
     m2 = std::max(m2, d2);
   }
   return std::sqrt(m2);
+}
+
+template <int D>
+double NeighbourList<D>::maxDisplacement(const ParticleSet<D>& p) const {
+  return largestDisplacement(domain_, p.position.data(), reference_.data(), track_fixed_ ? p.size() : p.n_moving);
 }
 
 template <int D>
@@ -281,5 +285,7 @@ void NeighbourList<D>::build(const ParticleSet<D>& p) {
 
 template class NeighbourList<2>;
 template class NeighbourList<3>;
+template double largestDisplacement<2>(const Domain<2>&, const double*, const double*, std::size_t);
+template double largestDisplacement<3>(const Domain<3>&, const double*, const double*, std::size_t);
 
 }  // namespace vesph

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "vesph/core/neighbours.hpp"
 #include "vesph/parallel/particle_exchange.hpp"
 
 namespace vesph {
@@ -69,21 +70,12 @@ class MpiDistribution final : public ParticleDistribution<D> {
   }
 
   bool needsRedistribution(const ParticleSet<D>& p, double step_motion) override {
-    double worst2 = 0;
-    const std::size_t n = p.ownedMoving();
-    for (std::size_t i = 0; i < n; ++i) {
-      double d2 = 0;
-      for (int a = 0; a < D; ++a) {
-        const double d = domain_.image(a, p.position[D * i + a] - reference_[D * i + a]);
-        d2 += d * d;
-      }
-      worst2 = std::max(worst2, d2);
-    }
+    const double moved = largestDisplacement(domain_, p.position.data(), reference_.data(), p.ownedMoving());
     // A pair within the cutoff now was within cutoff + 2 d when the halo was built, d being the
     // larger of the two displacements: the halo (cutoff + skin) holds while d < skin / 2, and it
     // must hold until the next step has ended: twice the last step's motion is kept in reserve
     // (the speed may grow within the step).
-    return comm_.max(std::sqrt(worst2)) > 0.5 * skin_ - 2.0 * step_motion;
+    return comm_.max(moved) > 0.5 * skin_ - 2.0 * step_motion;
   }
 
   void redistribute(ParticleSet<D>& p) override {

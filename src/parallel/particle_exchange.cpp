@@ -348,7 +348,8 @@ void ParticleExchange<D>::refresh(std::span<const HaloArray> arrays) {
     }
     return n;
   };
-  std::vector<MPI_Request> requests(2 * K);
+  std::vector<MPI_Request>& requests = requests_;
+  requests.resize(2 * K);  // sized at the first refresh after a halo build
   for (std::size_t k = 0; k < K; ++k) {
     const std::size_t n = valuesFor(recv_moving_[k], recv_fixed_[k]);
     if (recv_buffer_[k].size() < n) recv_buffer_[k].resize(n);

@@ -25,6 +25,12 @@
 
 namespace vesph {
 
+// The largest distance, along the domain's minimum image, between the positions now and
+// reference of the first n particles (D values each), in parallel: how far a particle has moved
+// since a neighbour list or a halo was built.
+template <int D>
+double largestDisplacement(const Domain<D>& domain, const double* now, const double* reference, std::size_t n);
+
 template <int D>
 class NeighbourList {
  public:

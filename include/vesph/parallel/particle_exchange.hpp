@@ -96,6 +96,7 @@ class ParticleExchange {
   std::vector<std::size_t> recv_moving_, recv_fixed_, recv_moving_at_, recv_fixed_at_;
   std::size_t n_moving_with_halo_ = 0;
   std::vector<std::vector<double>> send_buffer_, recv_buffer_;
+  std::vector<MPI_Request> requests_;
   HaloCounters counters_;
 };
 
