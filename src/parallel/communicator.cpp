@@ -78,20 +78,6 @@ std::uint64_t Communicator::sum(std::uint64_t local) const {
   return out;
 }
 
-std::uint64_t Communicator::max(std::uint64_t local) const {
-  std::uint64_t out = local;
-  check(MPI_Allreduce(&local, &out, 1, MPI_UINT64_T, MPI_MAX, comm_), "MPI_Allreduce");
-  return out;
-}
-
-std::vector<std::uint64_t> Communicator::allGather(std::uint64_t local) const {
-  std::vector<std::uint64_t> out(static_cast<std::size_t>(size_));
-  check(MPI_Allgather(&local, 1, MPI_UINT64_T, out.data(), 1, MPI_UINT64_T, comm_), "MPI_Allgather");
-  return out;
-}
-
-void Communicator::barrier() const { check(MPI_Barrier(comm_), "MPI_Barrier"); }
-
 double loadImbalance(const Communicator& comm, double local_load) {
   const double total = comm.sum(local_load), largest = comm.max(local_load);
   if (total <= 0.0) return 1.0;

@@ -164,36 +164,7 @@ class MpiDistribution final : public ParticleDistribution<D> {
     auto by_id = [&](std::size_t a, std::size_t b) { return p.id[a] < p.id[b]; };
     std::sort(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(p.n_moving), by_id);
     std::sort(order.begin() + static_cast<std::ptrdiff_t>(p.n_moving), order.end(), by_id);
-    permute(p, order);
-  }
-
-  static void permute(ParticleSet<D>& p, const std::vector<std::size_t>& order) {
-    auto apply = [&](auto& v, std::size_t c) {
-      auto out = v;
-      for (std::size_t t = 0; t < order.size(); ++t)
-        for (std::size_t k = 0; k < c; ++k) out[c * t + k] = v[c * order[t] + k];
-      v.swap(out);
-    };
-    apply(p.position, D);
-    apply(p.velocity, D);
-    apply(p.density, 1);
-    apply(p.mass, 1);
-    apply(p.kind, 1);
-    apply(p.id, 1);
-    for (const auto& f : p.fields.all()) {
-      const std::size_t c = static_cast<std::size_t>(f->components);
-      std::vector<double> out(f->data.size());
-      const std::size_t nm = p.n_moving;
-      for (std::size_t t = 0; t < order.size(); ++t) {
-        const bool moving = t < nm;  // order keeps the groups: a moving slot takes a moving particle
-        if (f->range == Field::Range::moving && !moving) continue;
-        if (f->range == Field::Range::fixed && moving) continue;
-        const std::size_t to = f->range == Field::Range::fixed ? t - nm : t;
-        const std::size_t from = f->range == Field::Range::fixed ? order[t] - nm : order[t];
-        std::copy_n(f->data.begin() + static_cast<std::ptrdiff_t>(c * from), c, out.begin() + static_cast<std::ptrdiff_t>(c * to));
-      }
-      f->data.swap(out);
-    }
+    ParticleExchange<D>::reorder(p, order);
   }
 
   Communicator comm_;

@@ -325,6 +325,21 @@ void ParticleExchange<D>::keepOnly(ParticleSet<D>& p, std::span<const char> keep
 }
 
 template <int D>
+void ParticleExchange<D>::reorder(ParticleSet<D>& p, std::span<const std::size_t> order) {
+  if (order.size() != p.size()) throw std::invalid_argument("ParticleExchange::reorder: one place per particle");
+  SetBuilder<D> set(p, p.n_moving, p.nFixed());
+  for (std::size_t t = 0; t < order.size(); ++t) {
+    if ((order[t] < p.n_moving) != (t < p.n_moving))
+      throw std::invalid_argument("ParticleExchange::reorder: moving and fixed particles must keep their places");
+    set.copy(p, order[t], t);
+  }
+  const std::size_t gm = p.n_ghost_moving, gf = p.n_ghost_fixed;
+  set.install(p);
+  p.n_ghost_moving = gm;
+  p.n_ghost_fixed = gf;
+}
+
+template <int D>
 void ParticleExchange<D>::removeHalo(ParticleSet<D>& p) {
   if (!has_halo_) return;
   const std::size_t om = layout_.owned_moving, of = layout_.owned_fixed;

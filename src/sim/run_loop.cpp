@@ -118,22 +118,20 @@ bool RunLoop<D>::writeFrame(double t, bool only_if_finite) {
     throw NumericalFailure(os.str());
   }
   last_frame_time_ = t;
-  if (distribution_) {
-    // The owned particles of every process, gathered on process 0 in id order. No checkpoint
-    // yet: a distributed run cannot be resumed (issue 36).
-    const ParticleSet<D> whole = distribution_->gather(sim_.system_.particles);
-    if (writer_ && !sim_.gauges_.empty())  // measured on the whole set, as in a serial run
-      writer_->appendGauges(sim_.gauges_.evaluate(t, whole, sim_.system_.kernel, sim_.system_.domain));
-    if (writer_) writer_->writeFrame(t, static_cast<std::int64_t>(steps_), whole, pending_);
-    pending_.clear();
-    return true;
+  // A run across processes writes the owned particles of every process, gathered on process 0
+  // in id order (the other processes hold no writer); no checkpoint yet: a distributed run
+  // cannot be resumed (issue 36).
+  ParticleSet<D> gathered;
+  if (distribution_) gathered = distribution_->gather(sim_.system_.particles);
+  const ParticleSet<D>& frame = distribution_ ? gathered : sim_.system_.particles;
+  if (writer_) {
+    // The gauges from the frame's particle set (its pressure from the evaluation above).
+    if (!sim_.gauges_.empty())
+      writer_->appendGauges(sim_.gauges_.evaluate(t, frame, sim_.system_.kernel, sim_.system_.domain));
+    writer_->writeFrame(t, static_cast<std::int64_t>(steps_), frame, pending_);
+    if (!distribution_) writer_->writeCheckpoint(sim_.checkpoints_.at(t, totals(t)));
   }
-  // The gauges from the frame's particle set (its pressure from the evaluation above).
-  if (!sim_.gauges_.empty())
-    writer_->appendGauges(sim_.gauges_.evaluate(t, sim_.system_.particles, sim_.system_.kernel, sim_.system_.domain));
-  writer_->writeFrame(t, static_cast<std::int64_t>(steps_), sim_.system_.particles, pending_);
   pending_.clear();
-  writer_->writeCheckpoint(sim_.checkpoints_.at(t, totals(t)));
   return true;
 }
 

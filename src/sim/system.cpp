@@ -389,48 +389,39 @@ bool SphSystem<D>::resizeKeepsRates() const {
 // The rates of the owned moving particles, in the state's layout, into the field
 // "carried_rate" (one row of the state's per-particle values each), and back.
 template <int D>
-void SphSystem<D>::stashRates(const double* rate) {
+template <class Fn>
+void SphSystem<D>::forEachStateValue(Fn&& fn) const {
   const std::size_t n = particles.ownedMoving();
-  std::size_t width = 2 * D + 1;
-  for (const Field* f : evolving_) width += static_cast<std::size_t>(f->components);
-  Field& carried = particles.fields.require("carried_rate", static_cast<int>(width), Field::Range::moving);
-  carried.refreshed_in_halo = false;
-  carried.data.assign(particles.n_moving * width, 0.0);
   for (std::size_t i = 0; i < n; ++i) {
-    double* row = carried.at(i);
-    for (int a = 0; a < D; ++a) row[a] = rate[D * i + a];
-    row[D] = rate[n * D + i];
-    for (int a = 0; a < D; ++a) row[D + 1 + a] = rate[n * (D + 1) + D * i + a];
+    for (int a = 0; a < D; ++a) fn(D * i + a, i, a);                            // position
+    fn(n * D + i, i, D);                                                       // density
+    for (int a = 0; a < D; ++a) fn(n * (D + 1) + D * i + a, i, D + 1 + a);     // velocity
   }
   std::size_t off = n * (2 * D + 1), col = 2 * D + 1;
   for (const Field* f : evolving_) {
     const std::size_t c = static_cast<std::size_t>(f->components);
     for (std::size_t i = 0; i < n; ++i)
-      for (std::size_t k = 0; k < c; ++k) carried.at(i)[col + k] = rate[off + c * i + k];
+      for (std::size_t k = 0; k < c; ++k) fn(off + c * i + k, i, col + k);
     off += n * c;
     col += c;
   }
 }
 
 template <int D>
+void SphSystem<D>::stashRates(const double* rate) {
+  std::size_t width = 2 * D + 1;
+  for (const Field* f : evolving_) width += static_cast<std::size_t>(f->components);
+  Field& carried = particles.fields.require("carried_rate", static_cast<int>(width), Field::Range::moving);
+  carried.refreshed_in_halo = false;
+  carried.data.assign(particles.n_moving * width, 0.0);
+  forEachStateValue([&](std::size_t k, std::size_t i, std::size_t col) { carried.at(i)[col] = rate[k]; });
+}
+
+template <int D>
 void SphSystem<D>::takeRates(double* rate) const {
   const Field* carried = particles.fields.find("carried_rate");
   if (!carried) throw std::logic_error("SphSystem::takeRates without stashRates");
-  const std::size_t n = particles.ownedMoving();
-  for (std::size_t i = 0; i < n; ++i) {
-    const double* row = carried->at(i);
-    for (int a = 0; a < D; ++a) rate[D * i + a] = row[a];
-    rate[n * D + i] = row[D];
-    for (int a = 0; a < D; ++a) rate[n * (D + 1) + D * i + a] = row[D + 1 + a];
-  }
-  std::size_t off = n * (2 * D + 1), col = 2 * D + 1;
-  for (const Field* f : evolving_) {
-    const std::size_t c = static_cast<std::size_t>(f->components);
-    for (std::size_t i = 0; i < n; ++i)
-      for (std::size_t k = 0; k < c; ++k) rate[off + c * i + k] = carried->at(i)[col + k];
-    off += n * c;
-    col += c;
-  }
+  forEachStateValue([&](std::size_t k, std::size_t i, std::size_t col) { rate[k] = carried->at(i)[col]; });
 }
 
 template <int D>

@@ -5,8 +5,6 @@
 #include <mpi.h>
 
 #include <cstdint>
-#include <span>
-#include <vector>
 
 namespace vesph {
 
@@ -34,10 +32,6 @@ class Communicator {
   double max(double local) const;
   double sum(double local) const;
   std::uint64_t sum(std::uint64_t local) const;
-  std::uint64_t max(std::uint64_t local) const;
-  // Every rank's value, in rank order.
-  std::vector<std::uint64_t> allGather(std::uint64_t local) const;
-  void barrier() const;
 
  private:
   MPI_Comm comm_;

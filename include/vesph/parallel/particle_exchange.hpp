@@ -63,6 +63,10 @@ class ParticleExchange {
   // rank that built the whole scene. Local.
   void keepOnly(ParticleSet<D>& p, std::span<const char> keep);
 
+  // Puts the particles in the order given (order[t]: the particle that goes to place t; moving
+  // particles must stay in [0, n_moving)), every array and field with them. Local.
+  static void reorder(ParticleSet<D>& p, std::span<const std::size_t> order);
+
   // Appends the halo: a copy of every particle another rank owns within `radius` of this
   // rank's box (boxes: every rank's, from the partition; radius: the neighbour search's cutoff
   // plus its skin, so that the halo holds until the next rebuild). Collective.

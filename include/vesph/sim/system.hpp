@@ -140,6 +140,11 @@ class SphSystem final : public OdeSystem, public StateEvaluator {
   // After a distributed run's (re)distribution: effects, boundaries and the neighbour list
   // follow the new particle set.
   void afterRedistribution();
+  // fn(k, i, column) for every value of the state: k its place in the state vector, i its
+  // particle, column its place in the particle's row (position, density, velocity, evolving
+  // fields); the carried rates' layout (stashRates, takeRates).
+  template <class Fn>
+  void forEachStateValue(Fn&& fn) const;
   // The boundaries that move fixed particles (Boundary::movesFixed): placed at the time of
   // every evaluation and of every accepted step.
   void placeFixed(double t) {
