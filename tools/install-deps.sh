@@ -3,7 +3,7 @@
 # Does nothing when everything is already installed.
 set -eu
 PACKAGES="build-essential cmake ninja-build pkg-config
-  libsundials-dev libeigen3-dev libsuitesparse-dev libhdf5-dev hdf5-tools
+  libsundials-dev libeigen3-dev libsuitesparse-dev libhdf5-dev libhdf5-openmpi-dev hdf5-tools
   doctest-dev libtomlplusplus-dev libcli11-dev nlohmann-json3-dev
   libhypre-dev libopenmpi-dev openmpi-bin libtrilinos-zoltan-dev
   python3 python3-numpy python3-scipy python3-h5py python3-matplotlib libxml2-utils"

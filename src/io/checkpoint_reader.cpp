@@ -10,6 +10,10 @@
 
 #include "hdf5_support.hpp"
 
+#if VESPH_HAVE_MPI_RUNS
+#include <mpi.h>
+#endif
+
 namespace vesph {
 using namespace hdf5io;
 
@@ -42,6 +46,56 @@ std::uint64_t checkpointChecksum(const Checkpoint& c) {
     h.addVector(a->second);
   }
   return h.hash;
+}
+
+std::uint64_t checkpointChecksum(const Checkpoint& part, const CheckpointRows& rows, const void* communicator) {
+#if VESPH_HAVE_MPI_RUNS
+  // FNV-1a is sequential: the hash goes from process to process in rank order through each run
+  // of bytes that the processes hold in turn (a state segment, the ids), and every process
+  // continues from the last one's (a few messages of 8 bytes per run).
+  const MPI_Comm comm = *static_cast<const MPI_Comm*>(communicator);
+  int rank = 0, size = 1;
+  MPI_Comm_rank(comm, &rank);
+  MPI_Comm_size(comm, &size);
+  Fnv1a64 h;
+  auto inTurn = [&](const void* data, std::size_t bytes) {
+    if (rank > 0) MPI_Recv(&h.hash, 1, MPI_UINT64_T, rank - 1, 0, comm, MPI_STATUS_IGNORE);
+    h.add(data, bytes);
+    if (rank + 1 < size) MPI_Send(&h.hash, 1, MPI_UINT64_T, rank + 1, 0, comm);
+    MPI_Bcast(&h.hash, 1, MPI_UINT64_T, size - 1, comm);
+  };
+  const FrameRows& r = rows.rows;
+  std::size_t width = 0;
+  for (std::size_t w : rows.segment_widths) width += w;
+  const std::size_t n_moving = width ? part.state.size() / width : 0;
+  auto stateLaidOut = [&](const std::vector<double>& values) {
+    const std::uint64_t n = r.moving_total * width;
+    h.add(&n, sizeof n);
+    std::size_t off = 0;
+    for (std::size_t w : rows.segment_widths) {
+      inTurn(values.data() + off, n_moving * w * sizeof(double));
+      off += n_moving * w;
+    }
+  };
+  stateLaidOut(part.state);
+  const std::uint64_t ids = r.moving_total + r.fixed_total;
+  h.add(&ids, sizeof ids);
+  inTurn(part.id.data(), n_moving * sizeof(std::uint64_t));
+  inTurn(part.id.data() + n_moving, (part.id.size() - n_moving) * sizeof(std::uint64_t));
+  std::vector<const std::pair<std::string, std::vector<double>>*> arrays;
+  for (const auto& a : part.arrays) arrays.push_back(&a);
+  std::sort(arrays.begin(), arrays.end(), [](const auto* a, const auto* b) { return a->first < b->first; });
+  for (const auto* a : arrays) {
+    h.add(a->first.data(), a->first.size() + 1);
+    stateLaidOut(a->second);
+  }
+  return h.hash;
+#else
+  (void)part;
+  (void)rows;
+  (void)communicator;
+  throw std::logic_error("checkpointChecksum across processes needs a build with VESPH_MPI");
+#endif
 }
 
 ResumeSource readResumeSource(const std::string& dir, const std::string& name) {

@@ -71,6 +71,7 @@ void OutputWriter<D>::appendGauges(const std::vector<std::vector<double>>& rows)
   if (gauges_.empty()) return;
   if (file_ < 0) throw std::runtime_error("cannot write to " + h5_path_ + " after an earlier error");
   if (rows.size() != gauges_.size()) throw std::logic_error("appendGauges: one row per gauge");
+  bool written = true;
   try {
     Handle root(checkId(H5Gopen2(file_, "gauges", H5P_DEFAULT), "gauges"), H5Gclose);
     for (std::size_t k = 0; k < gauges_.size(); ++k) {
@@ -86,12 +87,13 @@ void OutputWriter<D>::appendGauges(const std::vector<std::vector<double>>& rows)
         hsize_t offset[1] = {gauge_rows_}, count[1] = {1};
         H5Sselect_hyperslab(fspace, H5S_SELECT_SET, offset, nullptr, count, nullptr);
         Handle mspace(checkId(H5Screate_simple(1, count, nullptr), cname), H5Sclose);
-        check(H5Dwrite(d, H5T_NATIVE_DOUBLE, mspace, fspace, H5P_DEFAULT, &rows[k][c]), "gauges");
+        if (writesSharedRows()) check(H5Dwrite(d, H5T_NATIVE_DOUBLE, mspace, fspace, H5P_DEFAULT, &rows[k][c]), "gauges");
       }
     }
   } catch (const std::runtime_error&) {
-    failed("the gauges");
+    written = false;
   }
+  if (!agreed(written)) failed("the gauges");
   ++gauge_rows_;
 }
 

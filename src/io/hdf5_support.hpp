@@ -208,14 +208,16 @@ inline hid_t createExtensible(hid_t group, const char* name, hid_t file_type, hs
 
 // Writes a whole 1-D extensible dataset, created on first use and then overwritten in place:
 // the checkpoint does not make the file grow with every frame.
+// write = false: the dataset's size only (a process other than the one that writes rows every
+// process holds alike, in a file written together).
 inline void writeResizable(hid_t group, const char* name, hid_t file_type, hid_t mem_type, const void* data, std::size_t n,
-                    hsize_t chunk_rows = 1 << 16) {
+                    hsize_t chunk_rows = 1 << 16, bool write = true) {
   Handle d(H5Lexists(group, name, H5P_DEFAULT) > 0 ? checkId(H5Dopen2(group, name, H5P_DEFAULT), name)
                                                     : createExtensible(group, name, file_type, chunk_rows),
            H5Dclose);
   hsize_t size[1] = {n};
   check(H5Dset_extent(d, size), name);
-  if (n) check(H5Dwrite(d, mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data), name);
+  if (n && write) check(H5Dwrite(d, mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data), name);
 }
 
 

@@ -15,6 +15,13 @@
 #include "vesph/core/types.hpp"
 #include "hdf5_support.hpp"
 
+#if VESPH_HAVE_MPI_RUNS
+#include <mpi.h>
+#ifndef H5_HAVE_PARALLEL
+#error "distributed runs (VESPH_HAVE_MPI_RUNS) write their file with parallel HDF5 (CMakeLists.txt finds it)"
+#endif
+#endif
+
 namespace vesph {
 using namespace hdf5io;
 
@@ -26,20 +33,112 @@ hid_t strongCloseAccess() {
   H5Pset_fclose_degree(fapl, H5F_CLOSE_STRONG);
   return fapl;
 }
+
+// Rows [offset, offset + count) of a dataset.
+struct RowPiece {
+  hsize_t offset, count;
+};
+
+#if VESPH_HAVE_MPI_RUNS
+// Writes this process's pieces of rows (cols values each; 0: a dataset of rank 1) of the open
+// dataset d from `data` (their values one piece after the other), in one collective transfer
+// that every process of the file makes (with no piece, it writes nothing).
+void writePieces(hid_t d, hid_t mem_type, const void* data, std::size_t cols, std::initializer_list<RowPiece> pieces,
+                 const char* name) {
+  Handle fspace(checkId(H5Dget_space(d), name), H5Sclose);
+  check(H5Sselect_none(fspace), name);
+  hsize_t values = 0;
+  for (const RowPiece& r : pieces) {
+    if (r.count == 0) continue;
+    const hsize_t start[2] = {r.offset, 0}, count[2] = {r.count, cols};
+    check(H5Sselect_hyperslab(fspace, H5S_SELECT_OR, start, nullptr, count, nullptr), name);
+    values += r.count * std::max<hsize_t>(cols, 1);
+  }
+  const hsize_t mem_dims[1] = {std::max<hsize_t>(values, 1)};
+  Handle mspace(checkId(H5Screate_simple(1, mem_dims, nullptr), name), H5Sclose);
+  if (values == 0) check(H5Sselect_none(mspace), name);
+  Handle xfer(checkId(H5Pcreate(H5P_DATASET_XFER), name), H5Pclose);
+  check(H5Pset_dxpl_mpio(xfer, H5FD_MPIO_COLLECTIVE), name);
+  check(H5Dwrite(d, mem_type, mspace, fspace, xfer, data), name);
+}
+
+// A frame's dataset of `rows` rows written by every process, each its pieces.
+void datasetPieces(hid_t group, const char* name, hid_t file_type, hid_t mem_type, const void* data, std::size_t rows,
+                   std::size_t cols, std::initializer_list<RowPiece> pieces) {
+  hsize_t dims[2] = {rows, cols};
+  Handle space(checkId(H5Screate_simple(cols ? 2 : 1, dims, nullptr), name), H5Sclose);
+  Handle d(checkId(H5Dcreate2(group, name, file_type, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), name), H5Dclose);
+  writePieces(d, mem_type, data, cols, pieces, name);
+}
+
+// writeResizable of a dataset that every process writes its pieces of.
+void writeResizablePieces(hid_t group, const char* name, hid_t file_type, hid_t mem_type, const void* data,
+                          std::size_t rows, const std::vector<RowPiece>& pieces) {
+  Handle d(H5Lexists(group, name, H5P_DEFAULT) > 0 ? checkId(H5Dopen2(group, name, H5P_DEFAULT), name)
+                                                    : createExtensible(group, name, file_type, 1 << 16),
+           H5Dclose);
+  hsize_t size[1] = {rows};
+  check(H5Dset_extent(d, size), name);
+  Handle fspace(checkId(H5Dget_space(d), name), H5Sclose);
+  check(H5Sselect_none(fspace), name);
+  hsize_t values = 0;
+  for (const RowPiece& r : pieces) {
+    if (r.count == 0) continue;
+    const hsize_t start[1] = {r.offset}, count[1] = {r.count};
+    check(H5Sselect_hyperslab(fspace, H5S_SELECT_OR, start, nullptr, count, nullptr), name);
+    values += r.count;
+  }
+  const hsize_t mem_dims[1] = {std::max<hsize_t>(values, 1)};
+  Handle mspace(checkId(H5Screate_simple(1, mem_dims, nullptr), name), H5Sclose);
+  if (values == 0) check(H5Sselect_none(mspace), name);
+  Handle xfer(checkId(H5Pcreate(H5P_DATASET_XFER), name), H5Pclose);
+  check(H5Pset_dxpl_mpio(xfer, H5FD_MPIO_COLLECTIVE), name);
+  check(H5Dwrite(d, mem_type, mspace, fspace, xfer, data), name);
+}
+#endif
 }  // namespace
 
 template <int D>
+void OutputWriter<D>::openAccess(std::int64_t fapl) const {
+  if (!communicator_) return;
+#if VESPH_HAVE_MPI_RUNS
+  check(H5Pset_fapl_mpio(fapl, *static_cast<const MPI_Comm*>(communicator_), MPI_INFO_NULL), "parallel file access");
+#else
+  throw std::logic_error("OutputWriter: a file written by several processes needs a build with VESPH_MPI");
+#endif
+}
+
+template <int D>
+bool OutputWriter<D>::agreed(bool ok) const {
+#if VESPH_HAVE_MPI_RUNS
+  if (communicator_) {
+    int mine = ok ? 1 : 0, all = 0;
+    MPI_Allreduce(&mine, &all, 1, MPI_INT, MPI_LAND, *static_cast<const MPI_Comm*>(communicator_));
+    return all != 0;
+  }
+#endif
+  return ok;
+}
+
+template <int D>
 OutputWriter<D>::OutputWriter(const std::string& dir, const std::string& name, const FileAttributes& attrs,
-                              double resume_time)
-    : dir_(dir), name_(name), extra_columns_(attrs.extra_columns), gauges_(attrs.gauges) {
+                              double resume_time, const void* communicator)
+    : dir_(dir), name_(name), extra_columns_(attrs.extra_columns), gauges_(attrs.gauges), communicator_(communicator) {
+#if VESPH_HAVE_MPI_RUNS
+  if (communicator_) MPI_Comm_rank(*static_cast<const MPI_Comm*>(communicator_), &rank_);
+#endif
   h5_path_ = (std::filesystem::path(dir) / (name + ".h5")).string();
   xdmf_path_ = (std::filesystem::path(dir) / (name + ".xdmf")).string();
   startHdf5();
   {
     Handle fapl(strongCloseAccess(), H5Pclose);
+    openAccess(fapl);
     file_ = H5Fopen(h5_path_.c_str(), H5F_ACC_RDWR, fapl);
   }
-  if (file_ < 0) throw std::runtime_error("cannot open " + h5_path_ + " for writing");
+  if (!agreed(file_ >= 0)) {
+    close();
+    throw std::runtime_error("cannot open " + h5_path_ + " for writing");
+  }
   try {
     reopen(attrs, resume_time);
   } catch (const InputError& e) {
@@ -93,7 +192,8 @@ void OutputWriter<D>::reopen(const FileAttributes& attrs, double resume_time) {
       // A hook column the earlier segments did not have: only `escaped`, when
       // checks.leave_domain became "remove" on resume; nothing escaped before, so its rows are 0.
       const std::vector<double> zeros(diag_rows_, 0.0);
-      writeResizable(diag, col.c_str(), H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, zeros.data(), zeros.size(), 4096);
+      writeResizable(diag, col.c_str(), H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, zeros.data(), zeros.size(), 4096,
+                     writesSharedRows());
       continue;
     }
     datasetRows(diag, col.c_str());  // rank 1, or malformed
@@ -107,7 +207,46 @@ void OutputWriter<D>::reopen(const FileAttributes& attrs, double resume_time) {
 }
 
 template <int D>
-void OutputWriter<D>::writeCheckpoint(const Checkpoint& c) {
+void OutputWriter<D>::writeCheckpoint(const Checkpoint& c, const CheckpointRows* part) {
+  if ((part != nullptr) != (communicator_ != nullptr))
+    throw std::logic_error("OutputWriter::writeCheckpoint: a file written together takes each process's rows, a serial one none");
+  // A file written together: the state and every carried array are laid out as the state
+  // segments, each process's rows of each segment one piece; the ids as the frame's rows.
+  std::vector<RowPiece> state_pieces, id_pieces;
+  std::size_t state_values = c.state.size(), id_rows = c.id.size();
+  std::uint64_t checksum = 0;
+  if (part) {
+    const FrameRows& r = part->rows;
+    std::size_t width = 0;
+    for (std::size_t w : part->segment_widths) width += w;
+    const std::size_t n_moving = width ? c.state.size() / width : 0;
+    if (width == 0 || n_moving * width != c.state.size() || c.id.size() < n_moving)
+      throw std::logic_error("OutputWriter::writeCheckpoint: the state is not that of the process's moving particles");
+    std::size_t before = 0;
+    for (std::size_t w : part->segment_widths) {
+      state_pieces.push_back({r.moving_total * before + r.moving_offset * w, n_moving * w});
+      before += w;
+    }
+    id_pieces = {{r.moving_offset, n_moving}, {r.moving_total + r.fixed_offset, c.id.size() - n_moving}};
+    state_values = r.moving_total * width;
+    id_rows = r.moving_total + r.fixed_total;
+    for (const auto& [aname, values] : c.arrays)
+      if (values.size() != c.state.size())
+        throw std::logic_error("OutputWriter::writeCheckpoint: the carried array " + aname +
+                               " of a file written together is not laid out as the state");
+    checksum = checkpointChecksum(c, *part, communicator_);
+  } else {
+    checksum = checkpointChecksum(c);
+  }
+  // One of the state's datasets: this process's pieces, or the whole.
+  auto put = [&](hid_t group, const char* name, hid_t file_type, hid_t mem_type, const void* data, std::size_t n,
+                 std::size_t rows, const std::vector<RowPiece>& pieces) {
+    if (!part) return writeResizable(group, name, file_type, mem_type, data, n);
+#if VESPH_HAVE_MPI_RUNS
+    writeResizablePieces(group, name, file_type, mem_type, data, rows, pieces);
+#endif
+  };
+  bool written = true;
   try {
     Handle g(H5Lexists(file_, "checkpoint", H5P_DEFAULT) > 0
                  ? checkId(H5Gopen2(file_, "checkpoint", H5P_DEFAULT), "checkpoint")
@@ -116,15 +255,16 @@ void OutputWriter<D>::writeCheckpoint(const Checkpoint& c) {
     // The time is written last: a checkpoint torn by a failed write (a full disk) has none and
     // is refused on resume, instead of pairing the new state with the old time.
     if (H5Aexists(g, "time") > 0) check(H5Adelete(g, "time"), "time");
-    writeResizable(g, "state", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, c.state.data(), c.state.size());
-    writeResizable(g, "id", H5T_STD_U64LE, H5T_NATIVE_UINT64, c.id.data(), c.id.size());
+    put(g, "state", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, c.state.data(), c.state.size(), state_values, state_pieces);
+    put(g, "id", H5T_STD_U64LE, H5T_NATIVE_UINT64, c.id.data(), c.id.size(), id_rows, id_pieces);
     if (!c.arrays.empty()) {
       Handle arr(H5Lexists(g, "arrays", H5P_DEFAULT) > 0
                      ? checkId(H5Gopen2(g, "arrays", H5P_DEFAULT), "checkpoint arrays")
                      : checkId(H5Gcreate2(g, "arrays", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), "checkpoint arrays"),
                  H5Gclose);
       for (const auto& [aname, values] : c.arrays)
-        writeResizable(arr, aname.c_str(), H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, values.data(), values.size());
+        put(arr, aname.c_str(), H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, values.data(), values.size(), state_values,
+            state_pieces);
     }
     // Arrays of an earlier checkpoint that this one does not carry (the integrator's rate after
     // a divergence) are removed: they are not part of this restart point, nor of its checksum.
@@ -141,7 +281,7 @@ void OutputWriter<D>::writeCheckpoint(const Checkpoint& c) {
       }
       for (const std::string& aname : stale) check(H5Ldelete(arr, aname.c_str(), H5P_DEFAULT), "stale checkpoint array");
     }
-    replaceAttrScalar<std::uint64_t>(g, "checksum", H5T_NATIVE_UINT64, checkpointChecksum(c));
+    replaceAttrScalar<std::uint64_t>(g, "checksum", H5T_NATIVE_UINT64, checksum);
     replaceAttrScalar<std::int64_t>(g, "step", H5T_NATIVE_INT64, c.step);
     replaceAttrScalar<std::uint64_t>(g, "rhs_evals", H5T_NATIVE_UINT64, c.rhs_evals);
     replaceAttrScalar<std::uint64_t>(g, "rejected_steps", H5T_NATIVE_UINT64, c.rejected_steps);
@@ -151,15 +291,20 @@ void OutputWriter<D>::writeCheckpoint(const Checkpoint& c) {
     replaceAttrScalar<std::uint64_t>(g, "resumes", H5T_NATIVE_UINT64, c.resumes);
     replaceAttrScalar<double>(g, "time", H5T_NATIVE_DOUBLE, c.time);
   } catch (const std::runtime_error&) {
-    failed("the checkpoint");
+    written = false;
   }
+  if (!agreed(written)) failed("the checkpoint");
   flush("the checkpoint");
 }
 
 template <int D>
-OutputWriter<D>::OutputWriter(const std::string& dir, const std::string& name, const FileAttributes& attrs)
-    : dir_(dir), name_(name), extra_columns_(attrs.extra_columns), gauges_(attrs.gauges) {
+OutputWriter<D>::OutputWriter(const std::string& dir, const std::string& name, const FileAttributes& attrs,
+                              const void* communicator)
+    : dir_(dir), name_(name), extra_columns_(attrs.extra_columns), gauges_(attrs.gauges), communicator_(communicator) {
   if (extra_columns_.size() > kMaxExtraDiagnostics) throw std::logic_error("too many extra diagnostics columns");
+#if VESPH_HAVE_MPI_RUNS
+  if (communicator_) MPI_Comm_rank(*static_cast<const MPI_Comm*>(communicator_), &rank_);
+#endif
   std::filesystem::create_directories(dir);
   h5_path_ = (std::filesystem::path(dir) / (name + ".h5")).string();
   xdmf_path_ = (std::filesystem::path(dir) / (name + ".xdmf")).string();
@@ -173,9 +318,13 @@ OutputWriter<D>::OutputWriter(const std::string& dir, const std::string& name, c
     // read the attribute as before. Smaller scenes keep the original format, byte for byte.
     if (attrs.scene_toml.size() > kCompactSceneBytes)
       check(H5Pset_libver_bounds(fapl, H5F_LIBVER_V18, H5F_LIBVER_LATEST), "file format");
+    openAccess(fapl);
     file_ = H5Fcreate(h5_path_.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl);
   }
-  if (file_ < 0) throw std::runtime_error("cannot create " + h5_path_ + noSpaceNote());
+  if (!agreed(file_ >= 0)) {
+    close();
+    throw std::runtime_error("cannot create " + h5_path_ + noSpaceNote());
+  }
   try {
     attrString(file_, "format", "vesph-1");
     attrScalar<int>(file_, "dim", H5T_NATIVE_INT, attrs.dim);
@@ -226,7 +375,7 @@ void OutputWriter<D>::failed(const std::string& what) {
   os << "cannot write " << what << " to " << h5_path_ << noSpaceNote();
   close();
   if (t >= 0) os << "; the frames up to t = " << t << " s and their checkpoint are intact: free space, then go on with --resume";
-  throw std::runtime_error(os.str());
+  throw OutputFailure(os.str());
 }
 
 template <int D>
@@ -242,7 +391,8 @@ void OutputWriter<D>::ensureSpace(std::size_t bytes, const char* what) {
   std::error_code ec;
   const auto space = std::filesystem::space(dir_, ec);
   const std::uintmax_t need = bytes + (std::uintmax_t{1} << 18);
-  if (ec || space.available >= need) return;
+  // A file written together: every process checks its own share, and all stop if one lacks room.
+  if (agreed(ec || space.available >= need)) return;
   std::ostringstream os;
   os << "no space left for " << what << " on the disk of " << dir_ << ": " << space.available << " bytes free, about "
      << need << " needed";
@@ -250,7 +400,7 @@ void OutputWriter<D>::ensureSpace(std::size_t bytes, const char* what) {
     os << "; the frames up to t = " << frames_.back().time
        << " s and their checkpoint are intact: free space, then go on with --resume";
   close();
-  throw std::runtime_error(os.str());
+  throw OutputFailure(os.str());
 }
 
 template <int D>
@@ -269,16 +419,30 @@ void OutputWriter<D>::appendDiagnostics(const std::vector<DiagnosticsRow>& rows)
     hsize_t offset[1] = {diag_rows_}, count[1] = {rows.size()};
     H5Sselect_hyperslab(fspace, H5S_SELECT_SET, offset, nullptr, count, nullptr);
     Handle mspace(checkId(H5Screate_simple(1, count, nullptr), cname), H5Sclose);
-    check(H5Dwrite(d, H5T_NATIVE_DOUBLE, mspace, fspace, H5P_DEFAULT, col.data()), "diagnostics");
+    if (writesSharedRows()) check(H5Dwrite(d, H5T_NATIVE_DOUBLE, mspace, fspace, H5P_DEFAULT, col.data()), "diagnostics");
   }
   diag_rows_ += rows.size();
 }
 
 template <int D>
 void OutputWriter<D>::writeFrame(double time, std::int64_t step, const ParticleSet<D>& p,
-                                 const std::vector<DiagnosticsRow>& new_rows) {
+                                 const std::vector<DiagnosticsRow>& new_rows, const FrameRows* rows) {
   if (file_ < 0) throw std::runtime_error("cannot write to " + h5_path_ + " after an earlier error");
+  if ((rows != nullptr) != (communicator_ != nullptr))
+    throw std::logic_error("OutputWriter::writeFrame: a file written together takes each process's rows, a serial one none");
   const std::size_t n = p.size();
+  // The frame's rows: this process's particles in a file written together, all of them else.
+  const std::size_t frame_rows = rows ? static_cast<std::size_t>(rows->moving_total + rows->fixed_total) : n;
+  // Writes one dataset of the frame (cols values per particle; 0: one).
+  auto put = [&](hid_t g, const char* name, hid_t file_type, hid_t mem_type, const void* data, std::size_t cols) {
+    if (!rows) return dataset(g, name, file_type, mem_type, data, n, cols);
+#if VESPH_HAVE_MPI_RUNS
+    // The process's moving particles, then its fixed ones: one run of rows each (the data
+    // holds them in that order), written in one transfer.
+    datasetPieces(g, name, file_type, mem_type, data, frame_rows, cols,
+                  {RowPiece{rows->moving_offset, p.n_moving}, RowPiece{rows->moving_total + rows->fixed_offset, p.nFixed()}});
+#endif
+  };
   {
     // The frame's datasets (id, kind, position, velocity, density, mass, pressure, stresses,
     // flags), the diagnostics rows, and the checkpoint written after it (state, ids, arrays).
@@ -292,45 +456,48 @@ void OutputWriter<D>::writeFrame(double time, std::int64_t step, const ParticleS
   char name[32];
   std::snprintf(name, sizeof name, "%06zu", frames_.size());
   const std::string group_path = std::string("/frames/") + name;
-  FrameInfo info{name, time, n, false, false, false, false};
+  FrameInfo info{name, time, frame_rows, false, false, false, false};
+  bool written = true;
   try {
     Handle g(checkId(H5Gcreate2(file_, group_path.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), "frame"), H5Gclose);
     attrScalar<double>(g, "time", H5T_NATIVE_DOUBLE, time);
     attrScalar<std::int64_t>(g, "step", H5T_NATIVE_INT64, step);
-    dataset(g, "id", H5T_STD_U64LE, H5T_NATIVE_UINT64, p.id.data(), n, 0);
-    dataset(g, "kind", H5T_STD_U8LE, H5T_NATIVE_UINT8, p.kind.data(), n, 0);
-    dataset(g, "position", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, p.position.data(), n, D);
-    dataset(g, "velocity", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, p.velocity.data(), n, D);
-    dataset(g, "density", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, p.density.data(), n, 0);
-    dataset(g, "mass", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, p.mass.data(), n, 0);
+    put(g, "id", H5T_STD_U64LE, H5T_NATIVE_UINT64, p.id.data(), 0);
+    put(g, "kind", H5T_STD_U8LE, H5T_NATIVE_UINT8, p.kind.data(), 0);
+    put(g, "position", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, p.position.data(), D);
+    put(g, "velocity", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, p.velocity.data(), D);
+    put(g, "density", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, p.density.data(), 0);
+    put(g, "mass", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, p.mass.data(), 0);
     if (const Field* f = p.fields.find("pressure"); f && f->range == Field::Range::all) {
-      dataset(g, "pressure", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, f->data.data(), n, 0);
+      put(g, "pressure", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, f->data.data(), 0);
       info.pressure = true;
     }
     if (const Field* f = p.fields.find("extra_stress"); f && f->range == Field::Range::all) {
-      dataset(g, "extra_stress", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, f->data.data(), n, f->components);
+      put(g, "extra_stress", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, f->data.data(), static_cast<std::size_t>(f->components));
       info.stress = true;
     }
     // 2D models with an out-of-plane stress (XPP, constitutive.hpp): T_zz = S_zz in planar flow
     // (D_zz = 0, so the solvent adds nothing).
     if (const Field* f = p.fields.find("elastic_stress_zz"); D == 2 && f && f->range == Field::Range::all) {
-      dataset(g, "extra_stress_zz", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, f->data.data(), n, 0);
+      put(g, "extra_stress_zz", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, f->data.data(), 0);
       info.stress_zz = true;
     }
     if (const Field* f = p.fields.find("free_surface"); f && f->range == Field::Range::all) {
       std::vector<std::uint8_t> flag(n);
       for (std::size_t i = 0; i < n; ++i) flag[i] = f->data[i] != 0.0;
-      dataset(g, "free_surface", H5T_STD_U8LE, H5T_NATIVE_UINT8, flag.data(), n, 0);
+      put(g, "free_surface", H5T_STD_U8LE, H5T_NATIVE_UINT8, flag.data(), 0);
       info.free_surface = true;
     }
   } catch (const std::runtime_error&) {
-    failed("a frame");
+    written = false;
   }
+  if (!agreed(written)) failed("a frame");
   try {
     appendDiagnostics(new_rows);
   } catch (const std::runtime_error&) {
-    failed("the diagnostics");
+    written = false;
   }
+  if (!agreed(written)) failed("the diagnostics");
   flush("a frame");
   frames_.push_back(info);
   writeXdmf();
@@ -379,7 +546,7 @@ void OutputWriter<D>::writeXdmf() const {
     x << "   </Grid>\n";
   }
   x << "  </Grid>\n </Domain>\n</Xdmf>\n";
-  writeAtomically(xdmf_path_, x.str());
+  if (writesSharedRows()) writeAtomically(xdmf_path_, x.str());  // one writer of the small text file
 }
 
 void writeSummary(const std::string& dir, const nlohmann::json& summary) {

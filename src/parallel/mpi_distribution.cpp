@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <numeric>
 #include <stdexcept>
 #include <string>
@@ -22,7 +24,7 @@ class MpiDistribution final : public ParticleDistribution<D> {
  public:
   MpiDistribution(const Domain<D>& domain, double cutoff, double skin, double tolerance)
       : comm_(Communicator::world()), domain_(domain), partition_(comm_, domain), exchange_(comm_, domain),
-        gatherer_(comm_, domain), radius_(cutoff + skin), skin_(skin), tolerance_(tolerance) {
+        dealer_(comm_, domain), radius_(cutoff + skin), skin_(skin), tolerance_(tolerance) {
     if (!(skin > 0))
       throw std::invalid_argument("a distributed run needs a neighbour skin > 0 (neighbours.skin): the halo holds "
                                   "until the particles have moved half of it");
@@ -92,7 +94,7 @@ class MpiDistribution final : public ParticleDistribution<D> {
     buildHalo(p);
   }
 
-  ParticleSet<D> gather(const ParticleSet<D>& p) override {
+  ParticleSet<D> owned(const ParticleSet<D>& p) override {
     ParticleSet<D> copy;
     for (const auto& f : p.fields.all()) copy.fields.require(f->name, f->components, f->range).data = f->data;
     copy.position = p.position;
@@ -102,20 +104,56 @@ class MpiDistribution final : public ParticleDistribution<D> {
     copy.kind = p.kind;
     copy.id = p.id;
     copy.n_moving = p.n_moving;
-    // Drop the ghosts, send the owned particles to process 0, sort them there.
-    std::vector<char> owned(p.size(), 1);
-    std::fill(owned.begin() + static_cast<std::ptrdiff_t>(p.ownedMoving()), owned.begin() + static_cast<std::ptrdiff_t>(p.n_moving), 0);
-    std::fill(owned.begin() + static_cast<std::ptrdiff_t>(p.ownedEnd()), owned.end(), 0);
-    gatherer_.keepOnly(copy, owned);
-    const std::vector<int> to_root(copy.size(), 0);
-    gatherer_.migrate(copy, to_root);
-    sortById(copy);
+    std::vector<char> keep(p.size(), 1);
+    std::fill(keep.begin() + static_cast<std::ptrdiff_t>(p.ownedMoving()), keep.begin() + static_cast<std::ptrdiff_t>(p.n_moving), 0);
+    std::fill(keep.begin() + static_cast<std::ptrdiff_t>(p.ownedEnd()), keep.end(), 0);
+    dealer_.keepOnly(copy, keep);
     return copy;
+  }
+
+  OutputShare<D> deal(ParticleSet<D> owned) override {
+    // Blocks of the ids (the scene's ids are 0 .. N-1, moving ones first: each process then
+    // holds one contiguous run of the file's rows, which it writes as one piece).
+    std::uint64_t local_end = 0;
+    for (std::uint64_t ident : owned.id) local_end = std::max(local_end, ident + 1);
+    std::uint64_t id_end = 0;
+    MPI_Allreduce(&local_end, &id_end, 1, MPI_UINT64_T, MPI_MAX, comm_.handle());
+    const auto procs = static_cast<std::uint64_t>(size());
+    std::vector<int> destination(owned.size());
+    for (std::size_t i = 0; i < owned.size(); ++i)
+      destination[i] = static_cast<int>(std::min(procs - 1, static_cast<std::uint64_t>(
+                                                                (static_cast<unsigned __int128>(owned.id[i]) * procs) / id_end)));
+    dealer_.migrate(owned, destination);
+    sortById(owned);
+    OutputShare<D> share;
+    const std::uint64_t counts[2] = {owned.n_moving, owned.nFixed()};
+    std::uint64_t offsets[2] = {0, 0}, totals[2] = {0, 0};
+    MPI_Exscan(counts, offsets, 2, MPI_UINT64_T, MPI_SUM, comm_.handle());
+    if (rank() == 0) offsets[0] = offsets[1] = 0;  // MPI_Exscan leaves rank 0's undefined
+    MPI_Allreduce(counts, totals, 2, MPI_UINT64_T, MPI_SUM, comm_.handle());
+    share.moving_offset = offsets[0];
+    share.moving_total = totals[0];
+    share.fixed_offset = offsets[1];
+    share.fixed_total = totals[1];
+    share.particles = std::move(owned);
+    return share;
   }
 
   double sum(double local) override { return comm_.sum(local); }
   double max(double local) override { return comm_.max(local); }
   std::uint64_t sum(std::uint64_t local) override { return comm_.sum(local); }
+  void sum(std::span<double> values) override {
+    MPI_Allreduce(MPI_IN_PLACE, values.data(), static_cast<int>(values.size()), MPI_DOUBLE, MPI_SUM, comm_.handle());
+  }
+  std::vector<double> allGather(const std::vector<double>& local) override {
+    const int mine = static_cast<int>(local.size());
+    std::vector<int> counts(static_cast<std::size_t>(size())), starts(static_cast<std::size_t>(size()), 0);
+    MPI_Allgather(&mine, 1, MPI_INT, counts.data(), 1, MPI_INT, comm_.handle());
+    for (std::size_t r = 1; r < counts.size(); ++r) starts[r] = starts[r - 1] + counts[r - 1];
+    std::vector<double> all(static_cast<std::size_t>(starts.back() + counts.back()));
+    MPI_Allgatherv(local.data(), mine, MPI_DOUBLE, all.data(), counts.data(), starts.data(), MPI_DOUBLE, comm_.handle());
+    return all;
+  }
 
   std::string firstMessage(const std::string& local) override {
     int mine = local.empty() ? size() : rank(), first = size();
@@ -126,6 +164,13 @@ class MpiDistribution final : public ParticleDistribution<D> {
     std::string out = rank() == first ? local : std::string(length, ' ');
     MPI_Bcast(out.data(), static_cast<int>(length), MPI_CHAR, first, comm_.handle());
     return out;
+  }
+
+  [[noreturn]] void abort(const std::string& message) override {
+    std::fprintf(stderr, "vesph: error on process %d of %d: %s; every process stops\n", rank(), size(), message.c_str());
+    std::fflush(stderr);
+    MPI_Abort(comm_.handle(), 1);
+    std::abort();  // MPI_Abort does not return
   }
 
   double imbalance() const override { return imbalance_; }
@@ -171,7 +216,7 @@ class MpiDistribution final : public ParticleDistribution<D> {
   MPI_Comm handle_ = comm_.handle();
   Domain<D> domain_;
   SpacePartition<D> partition_;
-  ParticleExchange<D> exchange_, gatherer_;
+  ParticleExchange<D> exchange_, dealer_;
   double radius_, skin_, tolerance_;
   std::vector<HaloArray> arrays_;
   std::vector<double> reference_;

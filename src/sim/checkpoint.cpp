@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <sstream>
+#include <unordered_map>
 #include <utility>
 
 namespace vesph {
@@ -27,7 +28,7 @@ void Checkpoints<D>::joinScene() {
          [effect](double, NamedArrays& out) { effect->saveCarried(out); },
          [effect](const ArrayLookup& find) { effect->restoreCarried(find); });
   }
-  if (system_.mayResize())  // the particle set itself is part of the restart point
+  if (system_.changesParticleSet())  // the particle set itself is part of the restart point
     join("", RestoreStage::particle_set, [this](double, NamedArrays& out) { saveParticleSet(out); },
          [this](const ArrayLookup& find) { restoreParticleSet(find); });
   for (auto& h : system_.hooks) {
@@ -64,6 +65,53 @@ Checkpoint Checkpoints<D>::at(double t, Checkpoint totals) const {
     carrier.save(t, own);
     for (auto& [aname, values] : own) c.arrays.emplace_back(arrayName(carrier, aname), std::move(values));
   }
+  return c;
+}
+
+namespace {
+constexpr const char* kRowsPrefix = "checkpoint:";
+}
+
+template <int D>
+void Checkpoints<D>::attachRows(ParticleSet<D>& owned, const Checkpoint& local) const {
+  const std::vector<std::size_t> widths = system_.segmentWidths();
+  std::size_t width = 0;
+  for (std::size_t w : widths) width += w;
+  const std::size_t n = system_.particles.ownedMoving();
+  if (local.state.size() != n * width) throw std::logic_error("Checkpoints::attachRows: not this process's checkpoint");
+  auto attach = [&](const std::string& name, const std::vector<double>& values) {
+    if (values.size() != local.state.size())
+      throw std::logic_error("checkpoint array " + name + ": a run across processes carries only arrays laid out as the state");
+    Field& rows = owned.fields.require(kRowsPrefix + name, static_cast<int>(width), Field::Range::moving);
+    rows.data.assign(owned.n_moving * width, 0.0);
+    forEachStateValue(n, widths, [&](std::size_t k, std::size_t i, std::size_t col) { rows.at(i)[col] = values[k]; });
+  };
+  attach("state", local.state);
+  for (const auto& [aname, values] : local.arrays) attach(aname, values);
+}
+
+template <int D>
+Checkpoint Checkpoints<D>::shareCheckpoint(const ParticleSet<D>& share, const Checkpoint& local) const {
+  const std::vector<std::size_t> widths = system_.segmentWidths();
+  auto detach = [&](const std::string& name) {
+    const Field* rows = share.fields.find(kRowsPrefix + name);
+    if (!rows) throw std::logic_error("Checkpoints::shareCheckpoint: no rows of " + name);
+    std::vector<double> values(share.n_moving * static_cast<std::size_t>(rows->components));
+    forEachStateValue(share.n_moving, widths, [&](std::size_t k, std::size_t i, std::size_t col) { values[k] = rows->at(i)[col]; });
+    return values;
+  };
+  Checkpoint c;
+  c.time = local.time;
+  c.step = local.step;
+  c.rhs_evals = local.rhs_evals;
+  c.rejected_steps = local.rejected_steps;
+  c.neighbour_builds = local.neighbour_builds;
+  c.wall_seconds = local.wall_seconds;
+  c.max_density_deviation = local.max_density_deviation;
+  c.resumes = local.resumes;
+  c.state = detach("state");
+  c.id = share.id;
+  for (const auto& a : local.arrays) c.arrays.emplace_back(a.first, detach(a.first));
   return c;
 }
 
@@ -160,7 +208,11 @@ void Checkpoints<D>::validate(const ResumeSource& src, const ResumeRules& rules)
 template <int D>
 void Checkpoints<D>::validatePositions(const Checkpoint& ck, const ResumeRules& rules) const {
   const Domain<D>& domain = system_.domain;
-  const std::size_t n = system_.particles.n_moving;
+  std::size_t width = 0;
+  for (std::size_t w : system_.segmentWidths()) width += w;
+  // The checkpoint's moving particles (this process's share of them in a run across processes
+  // is found later, by id).
+  const std::size_t n = std::min(ck.state.size() / width, ck.id.size());
   for (std::size_t i = 0; i < n; ++i)
     for (int a = 0; a < D; ++a) {
       const double x = ck.state[D * i + a];
@@ -174,6 +226,65 @@ void Checkpoints<D>::validatePositions(const Checkpoint& ck, const ResumeRules& 
           throw InputError(os.str());
         }
     }
+}
+
+template <int D>
+std::vector<double> Checkpoints<D>::ownedPart(const Checkpoint& ck, const std::vector<double>& values) const {
+  const std::vector<std::size_t> widths = system_.segmentWidths();
+  std::size_t width = 0;
+  for (std::size_t w : widths) width += w;
+  const std::size_t n_ck = ck.state.size() / width;
+  std::unordered_map<std::uint64_t, std::size_t> row_of;
+  row_of.reserve(n_ck);
+  for (std::size_t j = 0; j < n_ck; ++j) row_of.emplace(ck.id[j], j);
+  const ParticleSet<D>& p = system_.particles;
+  const std::size_t n = p.ownedMoving();
+  std::vector<std::size_t> rows(n);
+  bool found = values.size() == ck.state.size();
+  for (std::size_t i = 0; i < n && found; ++i) {
+    const auto it = row_of.find(p.id[i]);
+    found = it != row_of.end();
+    if (found) rows[i] = it->second;
+  }
+  // Every process must learn that one of them misses a particle (they all throw).
+  if (system_.distribution->sum(static_cast<std::uint64_t>(found ? 0 : 1)) != 0) throw anotherParticleSet();
+  std::vector<double> part(n * width);
+  std::size_t off_ck = 0, off = 0;
+  for (std::size_t w : widths) {
+    for (std::size_t i = 0; i < n; ++i)
+      std::copy_n(values.begin() + static_cast<std::ptrdiff_t>(off_ck + w * rows[i]), w,
+                  part.begin() + static_cast<std::ptrdiff_t>(off + w * i));
+    off_ck += n_ck * w;
+    off += n * w;
+  }
+  return part;
+}
+
+// Every process read the whole checkpoint; the scene's particles are distributed by their
+// initial positions. Each process takes its owned moving particles' state by id; then the
+// particles go to the processes that own their checkpointed positions (a redistribution, as
+// between steps), and the state is packed over the new owned set. The integrator's rate is
+// taken the same way, by id, once the particles are where they stay.
+template <int D>
+void Checkpoints<D>::resumeDistributed(Checkpoint& ck) {
+  ParticleDistribution<D>& dist = *system_.distribution;
+  const ParticleSet<D>& p = system_.particles;
+  std::size_t width = 0;
+  for (std::size_t w : system_.segmentWidths()) width += w;
+  const std::uint64_t moving = dist.sum(static_cast<std::uint64_t>(p.ownedMoving()));
+  const std::uint64_t all = dist.sum(static_cast<std::uint64_t>(p.ownedMoving() + p.ownedEnd() - p.n_moving));
+  if (ck.state.size() != moving * width || ck.id.size() != all) throw anotherParticleSet();
+  state_.values() = ownedPart(ck, ck.state);
+  system_.rearrangeParticles(state_.data());
+  state_.resize(system_.size());
+  system_.pack(state_.data());
+  for (auto& [aname, values] : ck.arrays) {
+    if (aname != "integrator.carried")
+      throw InputError("--resume: the checkpoint in " + where_ + " carries '" + aname +
+                       "', which a run across processes does not restore; resume it as one process");
+    values = ownedPart(ck, values);
+  }
+  ck.state.clear();
 }
 
 template <int D>
@@ -194,6 +305,12 @@ Checkpoint Checkpoints<D>::resume(const std::string& dir, const ResumeRules& rul
     ~ClearOnExit() { slot = nullptr; }
   } clear_on_exit{resuming_};
   validate(src, rules);
+  if (system_.distribution) {
+    validatePositions(ck, rules);
+    resumeDistributed(ck);
+    restore(ck, RestoreStage::scene);
+    return std::move(src.checkpoint);
+  }
   restore(ck, RestoreStage::particle_set);
   if (ck.find("domain_exit.escaped") && !rules.removes_leaving)
     throw InputError("--resume: the run in " + where_ + " removes particles that leave the domain; "

@@ -82,11 +82,11 @@ std::vector<GaugeSeries> Gauges<D>::series() const {
 // Shepard-normalised SPH interpolation at the point (docs/theory.md "Gauges").
 template <int D>
 void Gauges<D>::point(const Gauge& g, const ParticleSet<D>& p, const Kernel& k, const Domain<D>& dom,
-                      std::vector<double>& row) const {
+                      ParticleDistribution<D>* distribution, std::vector<double>& row) const {
   const Field* pressure = p.fields.find("pressure");
   const double* pr = pressure ? pressure->data.data() : nullptr;
   const double support2 = k.supportRadius() * k.supportRadius();
-  const long n = static_cast<long>(p.n_moving);
+  const long n = static_cast<long>(p.ownedMoving());  // a process's halo is another's
   double sum = 0, sp = 0, srho = 0, sv0 = 0, sv1 = 0, sv2 = 0;
 #pragma omp parallel for reduction(+ : sum, sp, srho, sv0, sv1, sv2) schedule(static)
   for (long jj = 0; jj < n; ++jj) {
@@ -105,6 +105,11 @@ void Gauges<D>::point(const Gauge& g, const ParticleSet<D>& p, const Kernel& k, 
     sv1 += w * p.velocity[D * j + 1];
     if constexpr (D == 3) sv2 += w * p.velocity[D * j + 2];
   }
+  if (distribution) {
+    double sums[6] = {sum, sp, srho, sv0, sv1, sv2};
+    distribution->sum(sums);
+    sum = sums[0], sp = sums[1], srho = sums[2], sv0 = sums[3], sv1 = sums[4], sv2 = sums[5];
+  }
   const bool inside = sum > 0;
   row.push_back(inside && pr ? sp / sum : kNaN);
   const double sv[3] = {sv0, sv1, sv2};
@@ -118,17 +123,25 @@ void Gauges<D>::point(const Gauge& g, const ParticleSet<D>& p, const Kernel& k, 
 // spray above it do not count), sampled every dx/8 with a linear interpolation of the crossing.
 // NaN when the foot is dry (no water within one kernel support above it).
 template <int D>
-double Gauges<D>::elevation(const Gauge& g, const ParticleSet<D>& p, const Kernel& k, const Domain<D>& dom) const {
+double Gauges<D>::elevation(const Gauge& g, const ParticleSet<D>& p, const Kernel& k, const Domain<D>& dom,
+                            ParticleDistribution<D>* distribution) const {
   const double support = k.supportRadius(), support2 = support * support;
   // The particles within one support of the line, as (height, horizontal distance^2, volume).
   std::vector<std::array<double, 3>> near;
-  for (std::size_t j = 0; j < p.n_moving; ++j) {
+  for (std::size_t j = 0; j < p.ownedMoving(); ++j) {
     double h2 = 0;
     for (int a = 0; a < D - 1; ++a) {
       const double d = dom.image(a, g.position[a] - p.position[D * j + a]);
       h2 += d * d;
     }
     if (h2 < support2) near.push_back({p.position[D * j + D - 1], h2, p.mass[j] / p.density[j]});
+  }
+  if (distribution) {  // every process's column of particles, on every process
+    std::vector<double> mine;
+    for (const auto& v : near) mine.insert(mine.end(), v.begin(), v.end());
+    const std::vector<double> all = distribution->allGather(mine);
+    near.resize(all.size() / 3);
+    for (std::size_t m = 0; m < near.size(); ++m) near[m] = {all[3 * m], all[3 * m + 1], all[3 * m + 2]};
   }
   auto kernelSum = [&](double z) {
     double s = 0;
@@ -163,19 +176,21 @@ double Gauges<D>::elevation(const Gauge& g, const ParticleSet<D>& p, const Kerne
 
 template <int D>
 std::vector<std::vector<double>> Gauges<D>::evaluate(double t, const ParticleSet<D>& p, const Kernel& kernel,
-                                                     const Domain<D>& domain) const {
+                                                     const Domain<D>& domain,
+                                                     ParticleDistribution<D>* distribution) const {
   std::vector<std::vector<double>> rows;
   for (const Gauge& g : gauges_) {
     std::vector<double> row{t};
     switch (g.type) {
-      case Type::point: point(g, p, kernel, domain, row); break;
-      case Type::elevation: row.push_back(elevation(g, p, kernel, domain)); break;
+      case Type::point: point(g, p, kernel, domain, distribution, row); break;
+      case Type::elevation: row.push_back(elevation(g, p, kernel, domain, distribution)); break;
       case Type::front: {
         double front = -std::numeric_limits<double>::infinity();
-        const long n = static_cast<long>(p.n_moving);
+        const long n = static_cast<long>(p.ownedMoving());
 #pragma omp parallel for reduction(max : front) schedule(static)
         for (long j = 0; j < n; ++j) front = std::max(front, p.position[D * static_cast<std::size_t>(j) + g.axis]);
-        row.push_back(n > 0 ? front : kNaN);
+        if (distribution) front = distribution->max(front);
+        row.push_back(std::isfinite(front) ? front : kNaN);  // no fluid particle: -inf
         break;
       }
     }

@@ -50,8 +50,8 @@ class RunLoop final : public StepObserver {
   Simulation<D>& sim_;
   const RunOptions& opt_;
   const Clock::time_point t_start_;
-  // A run across processes (docs/architecture.md "Distributed runs"): process 0 writes the
-  // file, the summary and the progress; every process takes part in each frame's gathering.
+  // A run across processes (docs/architecture.md "Distributed runs"): every process writes its
+  // share of each frame into the one file; process 0 writes the summary and the progress.
   ParticleDistribution<D>* const distribution_;
   const bool root_;
   const Checkpoint resumed_;
@@ -75,12 +75,14 @@ ResumeRules RunLoop<D>::resumeRules() const {
 
 template <int D>
 std::unique_ptr<OutputWriter<D>> RunLoop<D>::openWriter() const {
-  if (opt_.output_dir.empty() || !root_) return nullptr;
+  if (opt_.output_dir.empty()) return nullptr;
   const SphSystem<D>& sys = sim_.system_;
   const FileAttributes attrs{D, sim_.resolved_scene_, sim_.dx_, sys.kernel.h, std::string(kernelName(sys.kernel.type)),
                              StepChecks<D>::hookColumns(sys), sim_.gauges_.series()};
-  return opt_.resume ? std::make_unique<OutputWriter<D>>(opt_.output_dir, sim_.header_.name, attrs, t0_)
-                     : std::make_unique<OutputWriter<D>>(opt_.output_dir, sim_.header_.name, attrs);
+  // A run across processes: every process opens the file and writes its share of each frame.
+  const void* together = distribution_ ? distribution_->communicator() : nullptr;
+  return opt_.resume ? std::make_unique<OutputWriter<D>>(opt_.output_dir, sim_.header_.name, attrs, t0_, together)
+                     : std::make_unique<OutputWriter<D>>(opt_.output_dir, sim_.header_.name, attrs, together);
 }
 
 // The run's totals include the earlier segments of a resumed run.
@@ -96,6 +98,10 @@ Checkpoint RunLoop<D>::totals(double t) const {
   c.wall_seconds = resumed_.wall_seconds + std::chrono::duration<double>(Clock::now() - t_start_).count();
   c.max_density_deviation = max_dev_seen_;
   c.resumes = resumed_.resumes + (opt_.resume ? 1 : 0);
+  if (distribution_) {  // the same on every process (they write the file's attributes together)
+    c.neighbour_builds = static_cast<std::uint64_t>(distribution_->max(static_cast<double>(c.neighbour_builds)));
+    c.wall_seconds = distribution_->max(c.wall_seconds);
+  }
   return c;
 }
 
@@ -118,18 +124,25 @@ bool RunLoop<D>::writeFrame(double t, bool only_if_finite) {
     throw NumericalFailure(os.str());
   }
   last_frame_time_ = t;
-  // A run across processes writes the owned particles of every process, gathered on process 0
-  // in id order (the other processes hold no writer); no checkpoint yet: a distributed run
-  // cannot be resumed (issue 36).
-  ParticleSet<D> gathered;
-  if (distribution_) gathered = distribution_->gather(sim_.system_.particles);
-  const ParticleSet<D>& frame = distribution_ ? gathered : sim_.system_.particles;
-  if (writer_) {
-    // The gauges from the frame's particle set (its pressure from the evaluation above).
-    if (!sim_.gauges_.empty())
-      writer_->appendGauges(sim_.gauges_.evaluate(t, frame, sim_.system_.kernel, sim_.system_.domain));
-    writer_->writeFrame(t, static_cast<std::int64_t>(steps_), frame, pending_);
-    if (!distribution_) writer_->writeCheckpoint(sim_.checkpoints_.at(t, totals(t)));
+  SphSystem<D>& sys = sim_.system_;
+  // The gauges from the particle set (its pressure from the evaluation above).
+  if (!sim_.gauges_.empty())
+    writer_->appendGauges(sim_.gauges_.evaluate(t, sys.particles, sys.kernel, sys.domain, distribution_));
+  if (!distribution_) {
+    writer_->writeFrame(t, static_cast<std::int64_t>(steps_), sys.particles, pending_);
+    writer_->writeCheckpoint(sim_.checkpoints_.at(t, totals(t)));
+  } else {
+    // A run across processes: the owned particles, their checkpoint rows with them, are dealt
+    // out by id (each process then writes one run of the frame's rows, in a serial run's order)
+    // and every process writes its share of the one file.
+    const Checkpoint local = sim_.checkpoints_.at(t, totals(t));
+    ParticleSet<D> owned = distribution_->owned(sys.particles);
+    sim_.checkpoints_.attachRows(owned, local);
+    const OutputShare<D> share = distribution_->deal(std::move(owned));
+    const FrameRows rows{share.moving_offset, share.moving_total, share.fixed_offset, share.fixed_total};
+    writer_->writeFrame(t, static_cast<std::int64_t>(steps_), share.particles, pending_, &rows);
+    const CheckpointRows checkpoint_rows{rows, sys.segmentWidths()};
+    writer_->writeCheckpoint(sim_.checkpoints_.shareCheckpoint(share.particles, local), &checkpoint_rows);
   }
   pending_.clear();
   return true;
@@ -273,6 +286,9 @@ RunReport RunLoop<D>::run() {
     throw;  // a setting that only shows at run time: exit 2, no summary of a run that never ran
   } catch (const std::exception& e) {
     // I/O and other errors: report them in summary.json too; what was written stays readable.
+    // A run across processes: a failed write is every process's (OutputFailure); any other
+    // error met by one process alone would leave the others waiting for it.
+    if (distribution_ && !dynamic_cast<const OutputFailure*>(&e)) distribution_->abort(e.what());
     status = RunStatus::error;
     message = e.what();
   }
@@ -355,9 +371,6 @@ nlohmann::json RunLoop<D>::summary(const RunReport& report) {
 
 template <int D>
 RunReport Simulation<D>::run(const RunOptions& options) {
-  if (system_.distribution && options.resume)
-    throw InputError("--resume: a run across processes writes no checkpoint yet (issue 36); resume as one process "
-                     "from a serial run's file");
   return RunLoop<D>(*this, options).run();
 }
 

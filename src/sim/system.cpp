@@ -386,42 +386,38 @@ bool SphSystem<D>::resizeKeepsRates() const {
   return distribution && redistribute_pending_ && !anyHook(&StepHook<D>::pendingChanges);
 }
 
-// The rates of the owned moving particles, in the state's layout, into the field
-// "carried_rate" (one row of the state's per-particle values each), and back.
 template <int D>
-template <class Fn>
-void SphSystem<D>::forEachStateValue(Fn&& fn) const {
-  const std::size_t n = particles.ownedMoving();
-  for (std::size_t i = 0; i < n; ++i) {
-    for (int a = 0; a < D; ++a) fn(D * i + a, i, a);                            // position
-    fn(n * D + i, i, D);                                                       // density
-    for (int a = 0; a < D; ++a) fn(n * (D + 1) + D * i + a, i, D + 1 + a);     // velocity
-  }
-  std::size_t off = n * (2 * D + 1), col = 2 * D + 1;
-  for (const Field* f : evolving_) {
-    const std::size_t c = static_cast<std::size_t>(f->components);
-    for (std::size_t i = 0; i < n; ++i)
-      for (std::size_t k = 0; k < c; ++k) fn(off + c * i + k, i, col + k);
-    off += n * c;
-    col += c;
-  }
+std::vector<std::size_t> SphSystem<D>::segmentWidths() const {
+  std::vector<std::size_t> widths{D, 1, D};
+  for (const Field* f : evolving_) widths.push_back(static_cast<std::size_t>(f->components));
+  return widths;
 }
 
 template <int D>
+bool SphSystem<D>::changesParticleSet() const {
+  return anyHook(&StepHook<D>::changesParticles);
+}
+
+// The rates of the owned moving particles, in the state's layout, into the field
+// "carried_rate" (one row of the state's per-particle values each), and back.
+template <int D>
 void SphSystem<D>::stashRates(const double* rate) {
-  std::size_t width = 2 * D + 1;
-  for (const Field* f : evolving_) width += static_cast<std::size_t>(f->components);
+  const std::vector<std::size_t> widths = segmentWidths();
+  std::size_t width = 0;
+  for (std::size_t w : widths) width += w;
   Field& carried = particles.fields.require("carried_rate", static_cast<int>(width), Field::Range::moving);
   carried.refreshed_in_halo = false;
   carried.data.assign(particles.n_moving * width, 0.0);
-  forEachStateValue([&](std::size_t k, std::size_t i, std::size_t col) { carried.at(i)[col] = rate[k]; });
+  forEachStateValue(particles.ownedMoving(), widths,
+                    [&](std::size_t k, std::size_t i, std::size_t col) { carried.at(i)[col] = rate[k]; });
 }
 
 template <int D>
 void SphSystem<D>::takeRates(double* rate) const {
   const Field* carried = particles.fields.find("carried_rate");
   if (!carried) throw std::logic_error("SphSystem::takeRates without stashRates");
-  forEachStateValue([&](std::size_t k, std::size_t i, std::size_t col) { rate[k] = carried->at(i)[col]; });
+  forEachStateValue(particles.ownedMoving(), segmentWidths(),
+                    [&](std::size_t k, std::size_t i, std::size_t col) { rate[k] = carried->at(i)[col]; });
 }
 
 template <int D>

@@ -10,7 +10,8 @@
 #   - the 3D Oldroyd-B drop (walls in 3D) under 4, oversubscribed;
 #   - the output of a distributed run is valid vesph-1 (HDF5 + XDMF) and summary.json names the
 #     processes and the redistributions;
-#   - what is not distributed yet is refused before the run (exit 2): moving walls, --resume.
+#   - --resume with another process count (2 then 3, serial then 2, 2 then serial);
+#   - what is not distributed yet is refused before the run (exit 2): moving walls.
 . "$(dirname "$0")/../cli/lib.sh"
 MPIEXEC=$3
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1 OMP_NUM_THREADS=1
@@ -57,6 +58,29 @@ same channel "$SRC/cases/startup_channel_oldroyd_b.toml" 2 --set time.end=0.1 --
 same drop3d "$SRC/cases/drop_3d_oldroyd_b.toml" 4 --set time.end=0.004 --set output.interval=0.002
 
 expect 2 "does not support yet.*moving walls" -- "$MPIEXEC" -n 2 "$VESPH" run "$SRC/cases/couette_startup.toml" -o "$WORK/couette" --quiet
-# shellcheck disable=SC2086
-expect 2 "resume.*across processes" -- "$MPIEXEC" -n 2 "$VESPH" run "$DAM" -o "$WORK/dam.np2" --quiet --resume $DAM_CI
+
+# --resume with another process count: the dam break to 0.1 s on FIRST processes (0: serially),
+# then resumed from its checkpoint (written by every process into the one file) to 0.2 s on
+# SECOND; the file must hold the serial run's frames, diagnostics and gauges (the leapfrog's
+# rate travels in the checkpoint: the resumed run is the uninterrupted one to round-off), and a
+# serial resume checks the checkpoint's checksum, which the processes computed in turn.
+on() {  # on RANKS COMMAND...: serially for 0 ranks
+  ranks=$1; shift
+  if [ "$ranks" = 0 ]; then "$@"; else "$MPIEXEC" -n "$ranks" "$@"; fi
+}
+resumed() {
+  first=$1; second=$2; out="$WORK/dam.resume.$first.$second"
+  # shellcheck disable=SC2086
+  expect 0 "ok: finished" -- on "$first" "$VESPH" run "$DAM" -o "$out" --quiet $DAM_CI --set time.end=0.1
+  # shellcheck disable=SC2086
+  expect 0 "ok: finished" -- on "$second" "$VESPH" run "$DAM" -o "$out" --quiet --resume $DAM_CI
+  $SAME "$WORK/dam.serial/dam_break_2d.h5" "$out/dam_break_2d.h5" >"$out.log" 2>&1 && pass ||
+    fail "the run resumed from $first to $second processes differs from the serial run: $(grep -E 'above|error' "$out.log" | head -5)"
+  tail -1 "$out.log" | sed "s/^/dam break resumed, $first then $second processes: /"
+}
+resumed 2 3
+resumed 0 2
+resumed 2 0
+$PY "$SRC/tools/check_output.py" "$WORK/dam.resume.2.3" >"$WORK/check.log" 2>&1 && pass ||
+  fail "resumed distributed output not valid: $(tail -3 "$WORK/check.log")"
 finish

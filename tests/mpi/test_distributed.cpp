@@ -8,12 +8,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <map>
 #include <random>
 #include <vector>
 
 #include "vesph/core/neighbours.hpp"
 #include "vesph/core/pair_loop.hpp"
+#include "vesph/io/output.hpp"
 #include "vesph/parallel/particle_exchange.hpp"
 
 namespace vesph {
@@ -272,7 +274,95 @@ void checkHaloDensities(const std::array<int, D>& n, bool walls, bool periodic_x
   CHECK(loadImbalance(comm, load2) < 1.1);
 }
 
+// A whole checkpoint of n_moving fluid and n_fixed wall particles whose state segments hold
+// `widths` values per particle, with two carried arrays laid out as the state; values from ids.
+Checkpoint wholeCheckpoint(std::size_t n_moving, std::size_t n_fixed, const std::vector<std::size_t>& widths) {
+  Checkpoint c;
+  c.time = 0.25;
+  c.step = 42;
+  c.rhs_evals = 85;
+  std::size_t width = 0;
+  for (std::size_t w : widths) width += w;
+  c.state.resize(n_moving * width);
+  for (std::size_t k = 0; k < c.state.size(); ++k) c.state[k] = std::sin(0.37 * static_cast<double>(k)) + 0.001 * k;
+  for (std::size_t i = 0; i < n_moving + n_fixed; ++i) c.id.push_back(i);
+  for (const char* name : {"integrator.carried", "a.rate"}) {
+    std::vector<double> v(c.state.size());
+    for (std::size_t k = 0; k < v.size(); ++k) v[k] = std::cos(0.11 * static_cast<double>(k) + name[0]);
+    c.arrays.emplace_back(name, v);
+  }
+  return c;
+}
+
+// This process's part of the whole checkpoint: the rows [r n / P, (r+1) n / P) of the moving
+// and of the fixed particles, the state segment-major over its moving rows (CheckpointRows).
+Checkpoint checkpointPart(const Checkpoint& whole, std::size_t n_moving, std::size_t n_fixed,
+                          const std::vector<std::size_t>& widths, const Communicator& comm, FrameRows& rows) {
+  const auto r = static_cast<std::size_t>(comm.rank()), P = static_cast<std::size_t>(comm.size());
+  const std::size_t m0 = r * n_moving / P, m1 = (r + 1) * n_moving / P;
+  const std::size_t f0 = r * n_fixed / P, f1 = (r + 1) * n_fixed / P;
+  rows = {m0, n_moving, f0, n_fixed};
+  auto laidOut = [&](const std::vector<double>& all) {
+    std::vector<double> part;
+    std::size_t off = 0;
+    for (std::size_t w : widths) {
+      part.insert(part.end(), all.begin() + static_cast<std::ptrdiff_t>(off + m0 * w),
+                  all.begin() + static_cast<std::ptrdiff_t>(off + m1 * w));
+      off += n_moving * w;
+    }
+    return part;
+  };
+  Checkpoint part = whole;
+  part.state = laidOut(whole.state);
+  for (auto& [name, values] : part.arrays) values = laidOut(values);
+  part.id.assign(whole.id.begin() + static_cast<std::ptrdiff_t>(m0), whole.id.begin() + static_cast<std::ptrdiff_t>(m1));
+  part.id.insert(part.id.end(), whole.id.begin() + static_cast<std::ptrdiff_t>(n_moving + f0),
+                 whole.id.begin() + static_cast<std::ptrdiff_t>(n_moving + f1));
+  return part;
+}
+
 }  // namespace
+
+TEST_CASE("distributed output: the checkpoint written together is the whole one, its checksum computed in turn") {
+  const Communicator comm = Communicator::world();
+  const MPI_Comm handle = comm.handle();
+  const std::vector<std::size_t> widths{2, 1, 2, 3};  // 2D: positions, density, velocities, a stress
+  const std::size_t n_moving = 37, n_fixed = 11;      // divided unevenly by 2 and 4 processes
+  const Checkpoint whole = wholeCheckpoint(n_moving, n_fixed, widths);
+  FrameRows rows;
+  const Checkpoint part = checkpointPart(whole, n_moving, n_fixed, widths, comm, rows);
+  const CheckpointRows checkpoint_rows{rows, widths};
+  CHECK(checkpointChecksum(part, checkpoint_rows, &handle) == checkpointChecksum(whole));
+
+  // The frame and the checkpoint written by every process into one file read back as the whole.
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("vesph_mpi_output_" + std::to_string(comm.size()));
+  ParticleSet<2> share;
+  for (std::uint64_t ident : part.id) {
+    const double x = 0.01 * static_cast<double>(ident);
+    share.add(Vec<2>(x, -x), Vec<2>(1.0, 2.0), kRho + x, 0.1, ident < n_moving ? ParticleKind::fluid : ParticleKind::wall,
+              ident);
+  }
+  {
+    OutputWriter<2> writer(dir.string(), "together", FileAttributes{2, "[scene]", kDx, 1.2 * kDx, "wendland_c2", {}, {}},
+                           &handle);
+    writer.writeFrame(0.25, 42, share, {DiagnosticsRow{0.25, 1e-3, 1.0, 2.0, 3.0, 0.01}}, &rows);
+    writer.writeCheckpoint(part, &checkpoint_rows);
+  }
+  MPI_Barrier(handle);
+  const ResumeSource back = readResumeSource(dir.string(), "together");
+  CHECK(back.checkpoint.state == whole.state);
+  CHECK(back.checkpoint.id == whole.id);
+  REQUIRE(back.checkpoint.arrays.size() == 2);
+  for (const auto& [name, values] : whole.arrays) {
+    REQUIRE(back.checkpoint.find(name) != nullptr);
+    CHECK(*back.checkpoint.find(name) == values);
+  }
+  CHECK(back.checkpoint.checksum == checkpointChecksum(whole));
+  CHECK(back.frame_times == std::vector<double>{0.25});
+  MPI_Barrier(handle);
+  if (comm.rank() == 0) std::filesystem::remove_all(dir);
+}
 
 TEST_CASE("distributed 2D: migration, halo density sums and refresh match the serial set") {
   checkHaloDensities<2>({40, 24}, true, false);

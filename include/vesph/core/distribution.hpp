@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <span>
 #include <string>
+#include <vector>
 
 #include "vesph/core/particles.hpp"
 
@@ -24,6 +25,16 @@ struct DistributionCounters {
   std::uint64_t messages = 0;         // their point-to-point messages
   std::uint64_t bytes = 0;            // their payload
   std::uint64_t migrated = 0;         // particles that changed owner
+};
+
+// A process's part of a frame written by every process into one file (OutputWriter's
+// FrameRows): its particles, and where their rows lie among all processes' — the frame holds
+// every moving particle first (rows [0, moving_total)), then every fixed one.
+template <int D>
+struct OutputShare {
+  ParticleSet<D> particles;
+  std::uint64_t moving_offset = 0, moving_total = 0;  // rows of its moving particles
+  std::uint64_t fixed_offset = 0, fixed_total = 0;    // of its fixed ones, counted after the moving
 };
 
 template <int D>
@@ -52,16 +63,27 @@ class ParticleDistribution {
   // Removes the ghosts, sends particles to their owners (repartitioning when the load has
   // become uneven), and builds the halo again. Collective.
   virtual void redistribute(ParticleSet<D>& p) = 0;
-  // The owned particles of every process on process 0, moving ones first, each group sorted by
-  // id (what a serial run's frame holds, in a fixed order); an empty set elsewhere. Collective.
-  virtual ParticleSet<D> gather(const ParticleSet<D>& p) = 0;
+  // A copy of this process's owned particles (the halo left out), every array and field with
+  // them: what a frame and its checkpoint are dealt from (the caller may add fields). Local.
+  virtual ParticleSet<D> owned(const ParticleSet<D>& p) = 0;
+  // Deals the owned particles of every process out for writing one file together: process r
+  // gets those whose ids lie in the r-th of size() equal blocks of the ids, moving ones first,
+  // each group sorted by id, and learns where its rows go (OutputShare). Collective.
+  virtual OutputShare<D> deal(ParticleSet<D> owned) = 0;
 
   // Reductions over the processes.
   virtual double sum(double local) = 0;
   virtual double max(double local) = 0;
   virtual std::uint64_t sum(std::uint64_t local) = 0;
+  // Element-wise sums, in place (every process gets them). Collective.
+  virtual void sum(std::span<double> values) = 0;
+  // Every process's values, concatenated in rank order (every process gets them). Collective.
+  virtual std::vector<double> allGather(const std::vector<double>& local) = 0;
   // The first non-empty message in rank order (empty when every process's is). Collective.
   virtual std::string firstMessage(const std::string& local) = 0;
+  // Ends every process at once (exit code 1) after an error that only this one met, which the
+  // others, waiting for it in a collective call, cannot learn of: the message goes to stderr.
+  [[noreturn]] virtual void abort(const std::string& message) = 0;
 
   // The largest process's share of the moving particles over the mean (1: even), at the last
   // (re)distribution; the (re)distributions and the ghosts held, for the summary.

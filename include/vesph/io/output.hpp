@@ -6,6 +6,7 @@
 #include <array>
 #include <cstdint>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <utility>
 #include <vector>
@@ -85,28 +86,65 @@ struct ResumeSource {
 std::uint64_t checkpointChecksum(const Checkpoint& c);
 ResumeSource readResumeSource(const std::string& dir, const std::string& name);
 
+// A write that failed (a full disk, a file size limit): the file is closed, what was flushed
+// before stays readable. In a file written together every process throws it together.
+class OutputFailure : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// A file written by every process of a run across processes together (docs/architecture.md
+// "Distributed runs": parallel HDF5 over MPI-IO). Every process makes each OutputWriter call in
+// the same order with the same arguments, except that it passes only its share of the particles
+// and where their rows lie: the file holds every moving particle first (rows
+// [0, moving_total)), then every fixed one, exactly as a serial run's does. The diagnostics and
+// gauge rows (the same on every process) are written by process 0.
+struct FrameRows {
+  std::uint64_t moving_offset = 0, moving_total = 0;  // this process's moving particles' rows
+  std::uint64_t fixed_offset = 0, fixed_total = 0;    // its fixed particles', after the moving rows
+};
+// A process's part of a checkpoint: its moving particles' state values are the rows
+// [moving_offset, moving_offset + n) of each state segment (StateSegments: positions |
+// densities | velocities | evolving fields, `segment_widths` values per particle each); its ids
+// are the frame's rows. Every carried array is laid out as the state.
+struct CheckpointRows {
+  FrameRows rows;
+  std::vector<std::size_t> segment_widths;
+};
+
+// The checksum of a checkpoint whose values are spread over processes, each holding `part`, its
+// share of the rows (CheckpointRows): the same value checkpointChecksum gives for the whole
+// checkpoint, on every process. Collective over *communicator (an MPI_Comm).
+std::uint64_t checkpointChecksum(const Checkpoint& part, const CheckpointRows& rows, const void* communicator);
+
 template <int D>
 class OutputWriter {
  public:
-  OutputWriter(const std::string& dir, const std::string& name, const FileAttributes& attrs);
+  // `communicator` (an MPI_Comm*): the processes of a run across processes, which then write the
+  // file together (FrameRows); null for a serial run.
+  OutputWriter(const std::string& dir, const std::string& name, const FileAttributes& attrs,
+               const void* communicator = nullptr);
   // Reopens the file of a run to go on from its checkpoint at resume_time: the frames after
   // that time and the diagnostics rows after it are dropped (the resumed run writes them
   // again), the scene attribute is replaced by attrs.scene_toml, and frames and rows are then
   // appended. The diagnostics columns must be those of attrs.
-  OutputWriter(const std::string& dir, const std::string& name, const FileAttributes& attrs, double resume_time);
+  OutputWriter(const std::string& dir, const std::string& name, const FileAttributes& attrs, double resume_time,
+               const void* communicator = nullptr);
   ~OutputWriter();
   OutputWriter(const OutputWriter&) = delete;
   OutputWriter& operator=(const OutputWriter&) = delete;
 
   // Writes a frame of the particle set (positions as it holds them: wrapped into the periodic
   // box) and the diagnostics rows gathered since the last frame; flushes everything to disk.
+  // In a file written together, `p` is this process's share and `rows` says where it goes.
   void writeFrame(double time, std::int64_t step, const ParticleSet<D>& p,
-                  const std::vector<DiagnosticsRow>& new_rows);
+                  const std::vector<DiagnosticsRow>& new_rows, const FrameRows* rows = nullptr);
   // Appends one row per gauge (values in the order of FileAttributes::gauges' columns, time
   // first); written to disk with the next frame's flush. Call it before writeFrame.
   void appendGauges(const std::vector<std::vector<double>>& rows);
   // Replaces the checkpoint (/checkpoint); flushed. Called after the frame of the same state.
-  void writeCheckpoint(const Checkpoint& c);
+  // In a file written together, `c` holds this process's rows of the state, ids and arrays.
+  void writeCheckpoint(const Checkpoint& c, const CheckpointRows* rows = nullptr);
   std::size_t frames() const { return frames_.size(); }
   const std::string& h5Path() const { return h5_path_; }
   const std::string& xdmfPath() const { return xdmf_path_; }
@@ -136,6 +174,15 @@ class OutputWriter {
   // than `bytes` plus HDF5's metadata.
   void ensureSpace(std::size_t bytes, const char* what);
   std::string noSpaceNote() const;
+  // A file written together: opened by every process (MPI-IO); whether this process writes the
+  // rows every process holds alike (the diagnostics, the gauges: process 0); every process's
+  // `ok` agreed on (false when any is false).
+  void openAccess(std::int64_t fapl) const;
+  bool writesSharedRows() const { return rank_ == 0; }
+  bool agreed(bool ok) const;
+
+  const void* communicator_ = nullptr;
+  int rank_ = 0;
 
   std::string dir_, name_, h5_path_, xdmf_path_;
   std::int64_t file_ = -1;

@@ -58,6 +58,15 @@ class Checkpoints {
   // ids and every carrier's arrays.
   Checkpoint at(double t, Checkpoint totals) const;
 
+  // A run across processes (docs/architecture.md "Distributed runs"): each process writes the
+  // checkpoint rows of the particles it writes the frame of (ParticleDistribution::deal). The
+  // values of `local` (this process's checkpoint, at()) travel with its owned particles as
+  // fields of `owned` (attachRows); after the deal, the share's checkpoint is read back from
+  // them (shareCheckpoint), its state and arrays in the state's layout over the share's moving
+  // particles, its ids the share's.
+  void attachRows(ParticleSet<D>& owned, const Checkpoint& local) const;
+  Checkpoint shareCheckpoint(const ParticleSet<D>& share, const Checkpoint& local) const;
+
   // --resume: the checkpoint in `dir` replaces the initial state (the state, the particle set,
   // the effects' arrays). Everything is checked before a file is touched: a refused resume is
   // invalid input (exit 2). Returns the checkpoint (its state moved into the OdeState) for the
@@ -86,6 +95,13 @@ class Checkpoints {
   // While resuming: the file and its checkpoint (for the particle set's checks and messages).
   void validate(const ResumeSource& src, const ResumeRules& rules) const;
   void validatePositions(const Checkpoint& ck, const ResumeRules& rules) const;
+  // A distributed run's resume: the checkpoint (of any process count, or serial) holds every
+  // particle; each process takes its owned particles' values by id, then the particles go to
+  // the processes that own their positions.
+  void resumeDistributed(Checkpoint& ck);
+  // The values of a state-laid-out array of the checkpoint (all its moving particles) for this
+  // process's owned moving particles, found by id.
+  std::vector<double> ownedPart(const Checkpoint& ck, const std::vector<double>& values) const;
   std::string where_;
   const Checkpoint* resuming_ = nullptr;
 };

@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "vesph/core/distribution.hpp"
 #include "vesph/core/domain.hpp"
 #include "vesph/core/kernel.hpp"
 #include "vesph/core/particles.hpp"
@@ -32,9 +33,12 @@ class Gauges {
   // The series the output file holds: name, type, position and columns.
   std::vector<GaugeSeries> series() const;
   // One row per gauge at time t (time first), from the particles' positions, velocities,
-  // densities, masses and the "pressure" field (NaN where the scene has none).
+  // densities, masses and the "pressure" field (NaN where the scene has none). In a run across
+  // processes (`distribution`), from every process's owned particles (each its sums, reduced),
+  // the same rows on every process; collective then.
   std::vector<std::vector<double>> evaluate(double t, const ParticleSet<D>& p, const Kernel& kernel,
-                                            const Domain<D>& domain) const;
+                                            const Domain<D>& domain,
+                                            ParticleDistribution<D>* distribution = nullptr) const;
 
  private:
   enum class Type { point, elevation, front };
@@ -45,8 +49,9 @@ class Gauges {
     int axis = 0;  // front: the axis along which the front advances
   };
   void point(const Gauge& g, const ParticleSet<D>& p, const Kernel& k, const Domain<D>& dom,
-             std::vector<double>& row) const;
-  double elevation(const Gauge& g, const ParticleSet<D>& p, const Kernel& k, const Domain<D>& dom) const;
+             ParticleDistribution<D>* distribution, std::vector<double>& row) const;
+  double elevation(const Gauge& g, const ParticleSet<D>& p, const Kernel& k, const Domain<D>& dom,
+                   ParticleDistribution<D>* distribution) const;
 
   std::vector<Gauge> gauges_;
   double spacing_ = 0, top_ = 0;  // top_: the domain's upper bound along the vertical axis

@@ -28,6 +28,22 @@
 
 namespace vesph {
 
+// fn(k, i, column) for every value of a state of n particles whose segments hold `widths`
+// values per particle each (SphSystem::segmentWidths): k its place in the state vector, i its
+// particle, column its place in the particle's row (the segments' values side by side). The
+// carried rates' layout (SphSystem::stashRates) and a distributed checkpoint's
+// (Checkpoints::attachRows).
+template <class Fn>
+void forEachStateValue(std::size_t n, const std::vector<std::size_t>& widths, Fn&& fn) {
+  std::size_t off = 0, col = 0;
+  for (std::size_t w : widths) {
+    for (std::size_t i = 0; i < n; ++i)
+      for (std::size_t c = 0; c < w; ++c) fn(off + w * i + c, i, col + c);
+    off += n * w;
+    col += w;
+  }
+}
+
 template <int D>
 class SphSystem final : public OdeSystem, public StateEvaluator {
  public:
@@ -56,6 +72,11 @@ class SphSystem final : public OdeSystem, public StateEvaluator {
 
   std::size_t size() const override;
   StateSegments segments() const override;
+  // The state's values per particle in each of its segments, in order: D positions, the
+  // density, D velocities, then each evolving field's components.
+  std::vector<std::size_t> segmentWidths() const;
+  // Whether a hook adds or removes particles (the particle set is then part of a checkpoint).
+  bool changesParticleSet() const;
   // The right-hand side as an integrator calls it (counted in rhsEvaluations).
   void rhs(double t, const double* y, double* ydot) override;
   // The same evaluation without counting it (derived fields for output, tests, hooks).
@@ -140,11 +161,7 @@ class SphSystem final : public OdeSystem, public StateEvaluator {
   // After a distributed run's (re)distribution: effects, boundaries and the neighbour list
   // follow the new particle set.
   void afterRedistribution();
-  // fn(k, i, column) for every value of the state: k its place in the state vector, i its
-  // particle, column its place in the particle's row (position, density, velocity, evolving
-  // fields); the carried rates' layout (stashRates, takeRates).
-  template <class Fn>
-  void forEachStateValue(Fn&& fn) const;
+
   // The boundaries that move fixed particles (Boundary::movesFixed): placed at the time of
   // every evaluation and of every accepted step.
   void placeFixed(double t) {

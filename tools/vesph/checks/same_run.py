@@ -6,7 +6,8 @@ order them differently: a distributed run writes each frame's particles in id or
 ones first); both must hold the same ids. Every floating-point dataset the two frames share
 (position, velocity, density, mass, pressure, stresses) is compared by its largest difference
 over the largest magnitude of the dataset in A over all compared frames (or an absolute scale
-given with --atol, where that is larger), and the diagnostics columns likewise.
+given with --atol, where that is larger), and the diagnostics columns and the gauges' series
+likewise.
 
 Usage: same_run_check A.h5 B.h5 [--rtol R] [--atol NAME=VALUE]...
   --rtol R            the largest relative difference allowed (default 1e-9: round-off of a
@@ -60,6 +61,23 @@ def compare(path_a, path_b, floors):
                 yield f"diagnostics rows ({len(ca)} and {len(cb)})", float("inf")
             scale = max(float(np.max(np.abs(ca[:n]))) if n else 0.0, 1e-300)
             yield f"diagnostics {name}", float(np.max(np.abs(ca[:n] - cb[:n]))) / scale if n else 0.0
+        # The gauges' series (a distributed run sums each gauge over every process's particles):
+        # the same NaNs (a dry gauge), the values by the column's largest magnitude in A.
+        ga_all, gb_all = a.gauges(), b.gauges()
+        if set(ga_all) != set(gb_all):
+            yield f"gauges ({sorted(ga_all)} and {sorted(gb_all)})", float("inf")
+        for gname in sorted(set(ga_all) & set(gb_all)):
+            for col, va in ga_all[gname].columns.items():
+                vb = gb_all[gname].columns.get(col)
+                if vb is None or len(vb) != len(va):
+                    yield f"gauge {gname} {col} (rows)", float("inf")
+                    continue
+                if not np.array_equal(np.isnan(va), np.isnan(vb)):
+                    yield f"gauge {gname} {col} (NaN)", float("inf")
+                    continue
+                ok = ~np.isnan(va)
+                scale = max(float(np.max(np.abs(va[ok]))) if ok.any() else 0.0, 1e-300)
+                yield f"gauge {gname} {col}", float(np.max(np.abs(va[ok] - vb[ok]))) / scale if ok.any() else 0.0
 
 
 def run(args):
