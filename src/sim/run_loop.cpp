@@ -121,7 +121,7 @@ bool RunLoop<D>::writeFrame(double t, bool only_if_finite) {
     // the equation of state): a divergence, not a frame.
     std::ostringstream os;
     os << "non-finite pressure or stress in the frame at t = " << t << " s";
-    throw NumericalFailure(os.str());
+    throw SharedNumericalFailure(os.str());  // writtenFieldsFinite is every process's answer
   }
   last_frame_time_ = t;
   SphSystem<D>& sys = sim_.system_;
@@ -280,6 +280,9 @@ RunReport RunLoop<D>::run() {
   try {
     integrate(status, message);
   } catch (const NumericalFailure& e) {
+    // A run across processes: a failure thrown inside one process's right-hand side (a model's)
+    // is that process's alone; the others wait for it in the next exchange.
+    if (distribution_ && !dynamic_cast<const SharedNumericalFailure*>(&e)) distribution_->abort(e.what());
     status = RunStatus::diverged;
     message = e.what();
   } catch (const InputError&) {

@@ -192,7 +192,8 @@ class ArkodeErk final : public Integrator {
         os << "ARKODE " << name() << " (" << table_.name << ") failed at t = " << t_ << " s: " << arkodeFlagName(flag);
         if (flag == ARK_ERR_FAILURE || flag == ARK_TOO_CLOSE)
           os << " (the error test failed repeatedly or the step became too small: the solution is blowing up or the tolerances are too tight)";
-        throw NumericalFailure(os.str());
+        // Every process's ARKODE decides from the same global norms (a distributed state).
+        throw SharedNumericalFailure(os.str());
       }
       if (flag == ARK_TSTOP_RETURN) t_ = tout;
       if (resizable_ && sys_->resizePending()) resize(tout);

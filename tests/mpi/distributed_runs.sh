@@ -10,6 +10,7 @@
 #   - the 3D Oldroyd-B drop (walls in 3D) under 4, oversubscribed;
 #   - the output of a distributed run is valid vesph-1 (HDF5 + XDMF) and summary.json names the
 #     processes and the redistributions;
+#   - failures that every process meets end them together (exit 3, the last good frame);
 #   - --resume with another process count (2 then 3, serial then 2, 2 then serial);
 #   - what is not distributed yet is refused before the run (exit 2): moving walls.
 . "$(dirname "$0")/../cli/lib.sh"
@@ -58,6 +59,18 @@ same channel "$SRC/cases/startup_channel_oldroyd_b.toml" 2 --set time.end=0.1 --
 same drop3d "$SRC/cases/drop_3d_oldroyd_b.toml" 4 --set time.end=0.004 --set output.interval=0.002
 
 expect 2 "does not support yet.*moving walls" -- "$MPIEXEC" -n 2 "$VESPH" run "$SRC/cases/couette_startup.toml" -o "$WORK/couette" --quiet
+
+# Failures every process meets alike end them together, as a serial run ends (exit 3, the last
+# good state written by all into the file, the summary): a step check (reduced over the
+# processes) and a frame whose pressure is not finite.
+# shellcheck disable=SC2086
+expect 3 "diverged: a particle moves at .* faster than checks.max_speed.*last good state .* is written" -- \
+  "$MPIEXEC" -n 2 "$VESPH" run "$DAM" -o "$WORK/dam.slow" --quiet $DAM_CI --set checks.max_speed=1e-5
+$PY "$SRC/tools/check_output.py" "$WORK/dam.slow" >"$WORK/check.log" 2>&1 && pass ||
+  fail "output of a failed distributed run not valid: $(tail -3 "$WORK/check.log")"
+expect 3 "non-finite pressure or stress in the frame at t = 0 s" -- \
+  "$MPIEXEC" -n 2 "$VESPH" run "$SRC/cases/bench_periodic_box.toml" -o "$WORK/box.nan" --quiet \
+  --set effects.equation_of_state.sound_speed=1e200
 
 # --resume with another process count: the dam break to 0.1 s on FIRST processes (0: serially),
 # then resumed from its checkpoint (written by every process into the one file) to 0.2 s on

@@ -47,5 +47,12 @@ struct InputError : std::runtime_error {
 struct NumericalFailure : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
+// A numerical failure that every process of a run across processes meets alike, decided from
+// reduced quantities (ARKODE's error test over the global norm, the frame's finiteness check):
+// the processes end together, as a serial run does. Any other NumericalFailure may be one
+// process's alone (a model's, inside its right-hand side), and then ends every process at once.
+struct SharedNumericalFailure : NumericalFailure {
+  using NumericalFailure::NumericalFailure;
+};
 
 }  // namespace vesph
