@@ -10,7 +10,7 @@ namespace vesph {
 template <int D>
 void DomainExit<D>::apply(StepContext<D>& system, double, double, double* y) {
   remove_.clear();
-  const std::size_t n = system.particles.n_moving;
+  const std::size_t n = system.particles.ownedMoving();  // the state's particles
   for (std::size_t i = 0; i < n; ++i)
     if (!system.domain.insideNonPeriodic(y + D * i)) remove_.push_back(static_cast<Index>(i));
 }
@@ -29,12 +29,13 @@ void DomainExit<D>::resized(StepContext<D>&, const ParticleRemap&) {
 template <int D>
 void DomainExit<D>::diagnostics(std::vector<double>& values) const {
   // The row of a step counts that step's removals (made right after it).
-  values.push_back(static_cast<double>(escaped_ + remove_.size()));
+  const double escaped = static_cast<double>(escaped_ + remove_.size());
+  values.push_back(this->distribution() ? this->distribution()->sum(escaped) : escaped);  // every process's
 }
 
 template <int D>
 void DomainExit<D>::summarize(nlohmann::json& summary) const {
-  summary["escaped"] = escaped_;
+  summary["escaped"] = this->distribution() ? this->distribution()->sum(escaped_) : escaped_;
 }
 
 template <int D>

@@ -240,6 +240,26 @@ void InflowOutflow<D>::followFluid(ParticleSet<D>& p, const double* y, std::size
     const std::size_t l = static_cast<std::size_t>(lane_[k]);
     lane_lead_[l] = std::max(lane_lead_[l], (p.position[D * (n0 + buffer_[k]) + axis_] - inlet_) * sign_);
   }
+  if (ParticleDistribution<D>* dist = this->distribution()) {
+    // A lane's fluid and buffer particles may lie on several processes: its sums, its most
+    // upstream fluid particle and its leading buffer particle over all of them.
+    const std::size_t lanes = lane_sum_.size();
+    std::vector<double> sums(2 * lanes), extremes(2 * lanes);
+    for (std::size_t l = 0; l < lanes; ++l) {
+      sums[l] = lane_sum_[l];
+      sums[lanes + l] = static_cast<double>(lane_count_[l]);
+      extremes[l] = -lane_trail_[l];
+      extremes[lanes + l] = lane_lead_[l];
+    }
+    dist->sum(sums);
+    dist->max(extremes);
+    for (std::size_t l = 0; l < lanes; ++l) {
+      lane_sum_[l] = sums[l];
+      lane_count_[l] = static_cast<long>(sums[lanes + l]);
+      lane_trail_[l] = -extremes[l];
+      lane_lead_[l] = extremes[lanes + l];
+    }
+  }
   for (std::size_t l = 0; l < lane_speed_.size(); ++l) {
     if (lane_count_[l] > 0) lane_speed_[l] = std::max(0.0, lane_sum_[l] / static_cast<double>(lane_count_[l]));
     lane_shift_[l] = std::isfinite(lane_trail_[l]) ? std::max(0.0, lane_trail_[l] - spacing_ - lane_lead_[l]) : 0.0;
@@ -261,18 +281,47 @@ double InflowOutflow<D>::rampIntegral(double t) const {
 }
 
 template <int D>
+void InflowOutflow<D>::distributing(ParticleSet<D>& whole) {
+  Field& speed = whole.fields.require("inflow_speed", 1, Field::Range::fixed);
+  speed.refreshed_in_halo = false;  // the owner moves its buffer particles; ghosts follow their positions
+  speed.data.assign(whole.nFixed(), 0.0);
+  for (std::size_t k = 0; k < buffer_.size(); ++k) speed.at(buffer_[k])[0] = speed_[k];
+}
+
+template <int D>
+void InflowOutflow<D>::redistributed(StepContext<D>& system) {
+  const ParticleSet<D>& p = system.particles;
+  const Field* speed = p.fields.find("inflow_speed");
+  if (!speed) throw std::logic_error("InflowOutflow::redistributed before distributing");
+  buffer_.clear();
+  speed_.clear();
+  lane_.clear();
+  for (std::size_t k = 0; k < p.ownedEnd() - p.n_moving; ++k)
+    if (p.kind[p.n_moving + k] == static_cast<std::uint8_t>(ParticleKind::inflow)) {
+      buffer_.push_back(k);
+      speed_.push_back(speed->at(k)[0]);
+      // A buffer particle moves along the flow only: its lane is that of its position.
+      lane_.push_back(laneOf(Eigen::Map<const Vec<D>>(p.position.data() + D * (p.n_moving + k))));
+    }
+  fluid_count_ = p.ownedMoving();
+}
+
+template <int D>
 void InflowOutflow<D>::apply(StepContext<D>& system, double t, double dt, double* y) {
   ParticleSet<D>& p = system.particles;
-  const std::size_t n0 = p.n_moving;
+  const std::size_t n0 = p.n_moving;  // the fixed particles' start (a process's ghosts before it)
+  const std::size_t owned = p.ownedMoving();  // the state's particles
   release_.clear();
   released_offsets_.clear();
   remove_.clear();
-  if (!buffer_.empty()) {
+  // Across processes, every process takes part in the lanes' reductions (followFluid), also
+  // one that holds no buffer particle.
+  if (!buffer_.empty() || (extrapolated_ && this->distribution())) {
     // A prescribed buffer moves by the exact integral of its (ramped) speed over the step; an
     // extrapolated one follows the fluid (followFluid).
     const double advance = rampIntegral(t) - rampIntegral(t - dt);
     const double factor = rampFactor(t);
-    if (extrapolated_) followFluid(p, y, n0);
+    if (extrapolated_) followFluid(p, y, owned);
     for (std::size_t k = 0; k < buffer_.size(); ++k) {
       const std::size_t b = n0 + buffer_[k];
       double& x = p.position[D * b + axis_];
@@ -291,9 +340,9 @@ void InflowOutflow<D>::apply(StepContext<D>& system, double t, double dt, double
     }
   }
   if (outflow_)
-    for (std::size_t i = 0; i < n0; ++i)
+    for (std::size_t i = 0; i < owned; ++i)
       if ((y[D * i + out_axis_] - out_position_) * out_sign_ > 0) remove_.push_back(static_cast<Index>(i));
-  fluid_count_ = n0 + release_.size() - remove_.size();
+  fluid_count_ = owned + release_.size() - remove_.size();
 }
 
 template <int D>
@@ -312,7 +361,7 @@ void InflowOutflow<D>::resized(StepContext<D>& system, const ParticleRemap& rema
   release_.clear();
   released_offsets_.clear();
   remove_.clear();
-  fluid_count_ = p.n_moving;
+  fluid_count_ = p.ownedMoving();
 }
 
 template <int D>
@@ -336,20 +385,25 @@ void InflowOutflow<D>::restoreCarried(const ArrayLookup& find) {
 
 template <int D>
 void InflowOutflow<D>::diagnostics(std::vector<double>& values) const {
-  // The row of a step counts that step's changes (made right after it).
-  values.push_back(static_cast<double>(released_ + release_.size()));
-  values.push_back(static_cast<double>(removed_ + remove_.size()));
-  values.push_back(static_cast<double>(fluid_count_));
+  // The row of a step counts that step's changes (made right after it); a run across
+  // processes, every process's.
+  double row[3] = {static_cast<double>(released_ + release_.size()), static_cast<double>(removed_ + remove_.size()),
+                   static_cast<double>(fluid_count_)};
+  if (this->distribution()) this->distribution()->sum(row);
+  values.insert(values.end(), std::begin(row), std::end(row));
 }
 
 template <int D>
 void InflowOutflow<D>::summarize(nlohmann::json& summary) const {
   nlohmann::json j;
-  j["released"] = released_;
-  j["removed"] = removed_;
-  j["fluid_particles"] = fluid_count_;
-  if (!buffer_.empty()) {
-    j["buffer_particles"] = buffer_.size();
+  // A run across processes: every process's counts.
+  auto total = [&](std::uint64_t local) { return this->distribution() ? this->distribution()->sum(local) : local; };
+  j["released"] = total(released_);
+  j["removed"] = total(removed_);
+  j["fluid_particles"] = total(fluid_count_);
+  const std::uint64_t buffer_particles = total(buffer_.size());
+  if (buffer_particles > 0) {
+    j["buffer_particles"] = buffer_particles;
     j["velocity"] = extrapolated_ ? "extrapolated" : "prescribed";
     if (!extrapolated_) {
       j["mean_velocity"] = mean_velocity_;

@@ -71,14 +71,25 @@ class MpiDistribution final : public ParticleDistribution<D> {
     exchange_.refresh(arrays_);
   }
 
-  bool needsRedistribution(const ParticleSet<D>& p, double step_motion) override {
-    const double moved = largestDisplacement(domain_, p.position.data(), reference_.data(), p.ownedMoving());
+  RedistributionNeed needsRedistribution(const ParticleSet<D>& p, double step_motion, bool changes_here) override {
+    double moved = largestDisplacement(domain_, p.position.data(), reference_.data(), p.ownedMoving());
+    const std::size_t owned_fixed = p.ownedEnd() - p.n_moving;
+    if (owned_fixed)  // an inflow buffer moves (walls do not)
+      moved = std::max(moved, largestDisplacement(domain_, p.position.data() + D * p.n_moving,
+                                                  reference_.data() + D * p.ownedMoving(), owned_fixed));
     // A pair within the cutoff now was within cutoff + 2 d when the halo was built, d being the
     // larger of the two displacements: the halo (cutoff + skin) holds while d < skin / 2, and it
     // must hold until the next step has ended: twice the last step's motion is kept in reserve
-    // (the speed may grow within the step).
-    return comm_.max(moved) > 0.5 * skin_ - 2.0 * step_motion;
+    // (the speed may grow within the step). One reduction for both questions.
+    double local[2] = {moved, changes_here ? 1.0 : 0.0}, global[2] = {0, 0};
+    MPI_Allreduce(local, global, 2, MPI_DOUBLE, MPI_MAX, comm_.handle());
+    RedistributionNeed need;
+    need.particle_changes = global[1] > 0;
+    need.redistribute = need.particle_changes || global[0] > 0.5 * skin_ - 2.0 * step_motion;
+    return need;
   }
+
+  void removeHalo(ParticleSet<D>& p) override { exchange_.removeHalo(p); }
 
   void redistribute(ParticleSet<D>& p) override {
     exchange_.removeHalo(p);
@@ -145,6 +156,9 @@ class MpiDistribution final : public ParticleDistribution<D> {
   void sum(std::span<double> values) override {
     MPI_Allreduce(MPI_IN_PLACE, values.data(), static_cast<int>(values.size()), MPI_DOUBLE, MPI_SUM, comm_.handle());
   }
+  void max(std::span<double> values) override {
+    MPI_Allreduce(MPI_IN_PLACE, values.data(), static_cast<int>(values.size()), MPI_DOUBLE, MPI_MAX, comm_.handle());
+  }
   std::vector<double> allGather(const std::vector<double>& local) override {
     const int mine = static_cast<int>(local.size());
     std::vector<int> counts(static_cast<std::size_t>(size())), starts(static_cast<std::size_t>(size()), 0);
@@ -199,7 +213,10 @@ class MpiDistribution final : public ParticleDistribution<D> {
   void buildHalo(ParticleSet<D>& p) {
     imbalance_ = loadImbalance(comm_, static_cast<double>(p.n_moving));
     exchange_.buildHalo(p, partition_.boxes(), radius_);
+    // The owned particles' positions: moving ones, then fixed ones (a moving buffer's).
     reference_.assign(p.position.begin(), p.position.begin() + static_cast<std::ptrdiff_t>(D * p.ownedMoving()));
+    reference_.insert(reference_.end(), p.position.begin() + static_cast<std::ptrdiff_t>(D * p.n_moving),
+                      p.position.begin() + static_cast<std::ptrdiff_t>(D * p.ownedEnd()));
   }
 
   // Moving particles first, fixed ones after, each group by id.

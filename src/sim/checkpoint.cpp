@@ -289,6 +289,10 @@ void Checkpoints<D>::resumeDistributed(Checkpoint& ck) {
 
 template <int D>
 Checkpoint Checkpoints<D>::resume(const std::string& dir, const ResumeRules& rules) {
+  if (system_.distribution && system_.changesParticleSet())
+    throw InputError("--resume: a run across processes whose particle set changes (inflow, outflow, "
+                     "checks.leave_domain = \"remove\") writes no checkpoint yet; resume it as one process from a serial "
+                     "run's file, or start it again");
   ResumeSource src = readResumeSource(dir, rules.scene_name);
   where_ = dir + "/" + rules.scene_name + ".h5";
   const std::string diff =

@@ -135,14 +135,18 @@ bool RunLoop<D>::writeFrame(double t, bool only_if_finite) {
     // A run across processes: the owned particles, their checkpoint rows with them, are dealt
     // out by id (each process then writes one run of the frame's rows, in a serial run's order)
     // and every process writes its share of the one file.
-    const Checkpoint local = sim_.checkpoints_.at(t, totals(t));
+    // A scene whose particle set changes (inflow, outflow, particles leaving the domain) writes
+    // no checkpoint across processes yet: its restart point is the particle set itself.
+    const bool checkpoint = !sys.changesParticleSet();
+    const Checkpoint local = checkpoint ? sim_.checkpoints_.at(t, totals(t)) : Checkpoint{};
     ParticleSet<D> owned = distribution_->owned(sys.particles);
-    sim_.checkpoints_.attachRows(owned, local);
+    if (checkpoint) sim_.checkpoints_.attachRows(owned, local);
     const OutputShare<D> share = distribution_->deal(std::move(owned));
     const FrameRows rows{share.moving_offset, share.moving_total, share.fixed_offset, share.fixed_total};
     writer_->writeFrame(t, static_cast<std::int64_t>(steps_), share.particles, pending_, &rows);
     const CheckpointRows checkpoint_rows{rows, sys.segmentWidths()};
-    writer_->writeCheckpoint(sim_.checkpoints_.shareCheckpoint(share.particles, local), &checkpoint_rows);
+    if (checkpoint)
+      writer_->writeCheckpoint(sim_.checkpoints_.shareCheckpoint(share.particles, local), &checkpoint_rows);
   }
   pending_.clear();
   return true;

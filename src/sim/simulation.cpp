@@ -129,7 +129,9 @@ void Simulation<D>::distribute() {
   whole_scene_.particles = system_.particles.size();
   whole_scene_.moving = system_.particles.n_moving;
   std::vector<std::string> missing;
-  for (const auto& hk : system_.hooks) missing.push_back("the hook " + std::string(hk->name()));
+  for (const auto& hk : system_.hooks)
+    if (!hk->distributable())
+      missing.push_back("the hook " + std::string(hk->name()));
   if (!wall_points_.empty())
     missing.push_back("per-particle wall treatments (image walls, pressure_floor, polar frames, stress_extrapolation)");
   if (system_.movesFixed()) missing.push_back("moving walls");

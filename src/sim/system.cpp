@@ -89,6 +89,10 @@ void SphSystem<D>::setup(double spacing, double rest_density, double viscosity, 
 template <int D>
 void SphSystem<D>::distribute() {
   if (!distribution) return;
+  for (auto& hk : hooks) {
+    hk->setDistribution(distribution.get());
+    hk->distributing(particles);
+  }
   distribution->distribute(particles);
   afterRedistribution();
 }
@@ -106,6 +110,8 @@ void SphSystem<D>::afterRedistribution() {
   for (auto& b : boundaries) b->resized(remap_);
   neighbours.update(particles, true);
   driver.prepare(neighbours);
+  StepContext<D>& context = stepContext();
+  for (auto& hk : hooks) hk->redistributed(context);
 }
 
 // The state holds the moving particles this process owns (all of them in a serial run).
@@ -370,7 +376,10 @@ bool SphSystem<D>::afterStep(double t, double dt, double* y) {
   for (auto& e : effects) e->afterStep(step);
   if (distribution) {
     unpack(y);
-    redistribute_pending_ = distribution->needsRedistribution(particles, max_speed_ * dt);
+    const RedistributionNeed need =
+        distribution->needsRedistribution(particles, max_speed_ * dt, anyHook(&StepHook<D>::pendingChanges));
+    redistribute_pending_ = need.redistribute;
+    particle_changes_anywhere_ = need.particle_changes;
   }
   return true;
 }
@@ -383,7 +392,8 @@ double* SphSystem<D>::resizeState(double, double*) {
 
 template <int D>
 bool SphSystem<D>::resizeKeepsRates() const {
-  return distribution && redistribute_pending_ && !anyHook(&StepHook<D>::pendingChanges);
+  // A serial run evaluates again after its hooks' changes: so does every process then.
+  return distribution && redistribute_pending_ && !particle_changes_anywhere_;
 }
 
 template <int D>
@@ -432,15 +442,17 @@ bool SphSystem<D>::mayResize() const {
 
 template <int D>
 bool SphSystem<D>::resizePending() const {
-  return redistribute_pending_ || anyHook(&StepHook<D>::pendingChanges);
+  if (distribution) return redistribute_pending_;  // every process's answer (afterStep)
+  return anyHook(&StepHook<D>::pendingChanges);
 }
 
 template <int D>
 void SphSystem<D>::rearrangeParticles(const double* y) {
   unpack(y);  // the particle set holds the accepted (and post-processed) state
-  if (distribution) {  // the particles go to their owners, the halo is built again
+  if (distribution) {  // the hooks' changes, then the particles go to their owners, the halo is built again
+    if (particle_changes_anywhere_) changeParticlesAcrossProcesses();
     distribution->redistribute(particles);
-    redistribute_pending_ = false;
+    redistribute_pending_ = particle_changes_anywhere_ = false;
     afterRedistribution();
     return;
   }
@@ -448,6 +460,39 @@ void SphSystem<D>::rearrangeParticles(const double* y) {
   changes_.release.clear();
   StepContext<D>& context = stepContext();
   for (auto& hk : hooks) hk->collectChanges(context, changes_);
+  std::vector<std::uint64_t> released_ids(changes_.release.size());
+  for (std::uint64_t& ident : released_ids) ident = next_id_++;
+  applyChanges(released_ids);
+}
+
+template <int D>
+void SphSystem<D>::changeParticlesAcrossProcesses() {
+  changes_.remove.clear();
+  changes_.release.clear();
+  StepContext<D>& context = stepContext();
+  for (auto& hk : hooks) hk->collectChanges(context, changes_);
+  // The changes name particles of the set with its halo: the owned moving ones keep their
+  // places without it, the owned fixed ones move up by the ghost moving ones.
+  const std::size_t ghost_moving = particles.n_ghost_moving;
+  distribution->removeHalo(particles);
+  for (Index& b : changes_.release) b -= static_cast<Index>(ghost_moving);
+  // A serial run numbers the particles a step releases in the order of their buffer particles'
+  // ids (the buffer's order): every process's releases, in that order, take the next ids.
+  std::vector<double> mine;
+  for (Index b : changes_.release) mine.push_back(static_cast<double>(particles.id[b]));
+  std::vector<double> all = distribution->allGather(mine);
+  std::sort(all.begin(), all.end());
+  std::vector<std::uint64_t> released_ids;
+  for (double source : mine) {
+    const auto place = std::lower_bound(all.begin(), all.end(), source) - all.begin();
+    released_ids.push_back(next_id_ + static_cast<std::uint64_t>(place));
+  }
+  next_id_ += all.size();
+  applyChanges(released_ids);
+}
+
+template <int D>
+void SphSystem<D>::applyChanges(const std::vector<std::uint64_t>& released_ids) {
   const std::size_t n = particles.n_moving;
   removed_flag_.assign(n, 0);
   for (Index i : changes_.remove) {
@@ -460,10 +505,11 @@ void SphSystem<D>::rearrangeParticles(const double* y) {
   remap_.released_ids.clear();
   for (std::size_t i = 0; i < n; ++i)
     if (!removed_flag_[i]) remap_.source.push_back(static_cast<Index>(i));
-  for (Index b : changes_.release) {
+  for (std::size_t k = 0; k < changes_.release.size(); ++k) {
+    const Index b = changes_.release[k];
     if (b < n || b >= particles.size()) throw std::logic_error("a hook releases a particle that is not fixed");
     remap_.source.push_back(b);
-    remap_.released_ids.push_back(next_id_++);
+    remap_.released_ids.push_back(released_ids.at(k));
   }
   applyRemap();
 }

@@ -8,6 +8,9 @@
 #     and under adaptive ARKODE on 2 (the same steps as serially: global error norms);
 #   - the Oldroyd-B start-up channel (periodic, the elastic stress evolving in the state) under 2;
 #   - the 3D Oldroyd-B drop (walls in 3D) under 4, oversubscribed;
+#   - inflow and outflow (the channel, 2 processes; the extrapolated inlet of the open channel,
+#     2) and the 3D jet from a circular nozzle with particles leaving the domain (3 processes):
+#     particles released and removed between steps;
 #   - the output of a distributed run is valid vesph-1 (HDF5 + XDMF) and summary.json names the
 #     processes and the redistributions;
 #   - failures that every process meets end them together (exit 3, the last good frame);
@@ -57,6 +60,28 @@ cat "$WORK/summary.log"
 
 same channel "$SRC/cases/startup_channel_oldroyd_b.toml" 2 --set time.end=0.1 --set output.interval=0.05
 same drop3d "$SRC/cases/drop_3d_oldroyd_b.toml" 4 --set time.end=0.004 --set output.interval=0.002
+
+# Open boundaries: the inflow buffer's particles move and are released into the fluid, the
+# outflow removes particles (the changes made on the owned particles between steps; the released
+# particles numbered as serially, so the frames match by id), and in 3D the circular nozzle and
+# particles leaving the domain (checks.leave_domain = "remove").
+same inflow "$SRC/cases/channel_inflow_outflow.toml" 2 --set time.end=0.35
+same jet "$SRC/cases/jet_buckling_newtonian.toml" 3 --set time.end=0.06 --set output.interval=0.01 \
+  --set particles.spacing=1.0e-3 --set 'domain.min=[-12.0e-3,-3.0e-3,-12.0e-3]' \
+  --set 'domain.max=[12.0e-3,43.0e-3,12.0e-3]' --set 'blocks[1].min=[-12.0e-3,-3.0e-3,-12.0e-3]' \
+  --set 'inflow.max=[2.0e-3,43.0e-3,2.0e-3]' --set integrator.viscous_coefficient=0.125
+$PY - "$WORK/inflow.serial/summary.json" "$WORK/inflow.np2/summary.json" >"$WORK/flow.log" 2>&1 <<'PYEOF' && pass ||
+import json, sys
+a, b = (json.load(open(f))["flow"] for f in sys.argv[1:3])
+assert a == b and a["released"] > 0 and a["removed"] > 0, (a, b)
+print("released", b["released"], "removed", b["removed"], "as serially")
+PYEOF
+  fail "flow totals: $(tail -3 "$WORK/flow.log")"
+cat "$WORK/flow.log"
+# The extrapolated inlet: each lane's means and extremes span the processes.
+same open "$SRC/cases/channel_open_body_force.toml" 2 --set time.end=0.1
+expect 2 "particle set changes.*no checkpoint" -- "$MPIEXEC" -n 2 "$VESPH" run "$SRC/cases/channel_inflow_outflow.toml" \
+  -o "$WORK/inflow.np2" --quiet --resume --set time.end=0.35
 
 expect 2 "does not support yet.*moving walls" -- "$MPIEXEC" -n 2 "$VESPH" run "$SRC/cases/couette_startup.toml" -o "$WORK/couette" --quiet
 

@@ -19,6 +19,7 @@ template <int D>
 class DomainExit final : public StepHook<D> {
  public:
   std::string_view name() const override { return "domain_exit"; }
+  bool distributable() const override { return true; }  // per owned particle; the count reduced
   void apply(StepContext<D>& system, double t, double dt, double* y) override;
   bool changesParticles() const override { return true; }
   bool pendingChanges() const override { return !remove_.empty(); }

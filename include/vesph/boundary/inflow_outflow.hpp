@@ -78,6 +78,13 @@ class InflowOutflow final : public StepHook<D> {
   // the particle set, which the checkpoint keeps whole for such scenes.
   void saveCarried(NamedArrays& out) const override;
   void restoreCarried(const ArrayLookup& find) override;
+  // Runs across processes: the buffer is the owned fixed particles of kind inflow, each
+  // prescribed speed travelling with its particle as the fixed-range field "inflow_speed", each
+  // lane (extrapolated velocity) found from the position; a lane's means and extremes are
+  // reduced over the processes.
+  bool distributable() const override { return true; }
+  void distributing(ParticleSet<D>& whole) override;
+  void redistributed(StepContext<D>& system) override;
 
   bool extrapolatedVelocity() const { return extrapolated_; }
   bool hasBuffer() const { return !buffer_.empty(); }

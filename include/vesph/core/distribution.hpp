@@ -37,6 +37,12 @@ struct OutputShare {
   std::uint64_t fixed_offset = 0, fixed_total = 0;    // of its fixed ones, counted after the moving
 };
 
+// What the step just accepted asks of every process (ParticleDistribution::needsRedistribution).
+struct RedistributionNeed {
+  bool redistribute = false;     // the halo must be built again before the next step
+  bool particle_changes = false; // some process's hooks add or remove particles
+};
+
 template <int D>
 class ParticleDistribution {
  public:
@@ -56,10 +62,14 @@ class ParticleDistribution {
   // The owners' velocities, densities and every field into the ghosts (after a phase that wrote
   // per-particle values a later phase reads from neighbours). Collective.
   virtual void refreshFields(ParticleSet<D>& p) = 0;
-  // Whether some owned particle moved so far since the halo was built that the halo may miss
-  // a neighbour before the next step ends, a step moving a particle by up to step_motion (m).
-  // Collective (every process gets the same answer).
-  virtual bool needsRedistribution(const ParticleSet<D>& p, double step_motion) = 0;
+  // Whether some owned particle (fluid, or a moving fixed one: an inflow buffer's) moved so far
+  // since the halo was built that the halo may miss a neighbour before the next step ends, a
+  // step moving a particle by up to step_motion (m), or some process has particle changes of
+  // its hooks to make (changes_here: an inflow's releases, an outflow's removals). Collective
+  // (every process gets the same answer).
+  virtual RedistributionNeed needsRedistribution(const ParticleSet<D>& p, double step_motion, bool changes_here) = 0;
+  // Removes the ghosts (before the hooks' particle changes, which a set without ghosts takes).
+  virtual void removeHalo(ParticleSet<D>& p) = 0;
   // Removes the ghosts, sends particles to their owners (repartitioning when the load has
   // become uneven), and builds the halo again. Collective.
   virtual void redistribute(ParticleSet<D>& p) = 0;
@@ -75,8 +85,9 @@ class ParticleDistribution {
   virtual double sum(double local) = 0;
   virtual double max(double local) = 0;
   virtual std::uint64_t sum(std::uint64_t local) = 0;
-  // Element-wise sums, in place (every process gets them). Collective.
+  // Element-wise sums and maxima, in place (every process gets them). Collective.
   virtual void sum(std::span<double> values) = 0;
+  virtual void max(std::span<double> values) = 0;
   // Every process's values, concatenated in rank order (every process gets them). Collective.
   virtual std::vector<double> allGather(const std::vector<double>& local) = 0;
   // The first non-empty message in rank order (empty when every process's is). Collective.

@@ -21,6 +21,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "vesph/core/distribution.hpp"
 #include "vesph/core/domain.hpp"
 #include "vesph/core/kernel.hpp"
 #include "vesph/core/neighbours.hpp"
@@ -141,12 +142,31 @@ class StepHook {
   virtual void saveCarried(NamedArrays& out) const {}
   virtual void restoreCarried(const ArrayLookup& find) {}
   // Per-step diagnostics columns of this hook (names fixed at setup) and their last values.
+  // In a run across processes, the whole run's (every process calls it; collective).
   virtual std::vector<std::string> diagnosticsColumns() const { return {}; }
   virtual void diagnostics(std::vector<double>& values) const {}
-  // Totals for summary.json.
+  // Totals for summary.json (in a run across processes, the whole run's: collective).
   virtual void summarize(nlohmann::json& summary) const {}
   // One or more "# ..." lines for `vesph run` / `vesph check`.
   virtual std::string describe() const { return {}; }
+
+  // Runs across processes (docs/architecture.md "Distributed runs"). A hook that can run
+  // distributed says so; it then keeps no particle index across a redistribution: what it needs
+  // per particle travels as fields of the set, put there when the whole scene is distributed
+  // (distributing, before the first share is kept), and its index lists are rebuilt after
+  // every (re)distribution (redistributed). Its changes (collectChanges) are indices into the
+  // process's set with its halo; the system makes them on the owned particles. Its totals are
+  // reduced over the processes through distribution().
+  virtual bool distributable() const { return false; }
+  virtual void distributing(ParticleSet<D>& whole) {}
+  virtual void redistributed(StepContext<D>& system) {}
+  void setDistribution(ParticleDistribution<D>* distribution) { distribution_ = distribution; }
+
+ protected:
+  ParticleDistribution<D>* distribution() const { return distribution_; }
+
+ private:
+  ParticleDistribution<D>* distribution_ = nullptr;
 };
 
 }  // namespace vesph

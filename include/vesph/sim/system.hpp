@@ -158,6 +158,12 @@ class SphSystem final : public OdeSystem, public StateEvaluator {
   void particlePass(const std::vector<Effect<D>*>& list, const RhsContext<D>& ctx, std::size_t n);
   // remap_ applied to the particle set, effects, boundaries, hooks and the neighbour structures.
   void applyRemap();
+  // The hooks' changes (changes_, collected) as remap_, the released particles taking the ids
+  // given (one per release, in order), then applied.
+  void applyChanges(const std::vector<std::uint64_t>& released_ids);
+  // A distributed run's hook changes: made on the owned particles (the halo removed), the
+  // released particles numbered across the processes as a serial run numbers them.
+  void changeParticlesAcrossProcesses();
   // After a distributed run's (re)distribution: effects, boundaries and the neighbour list
   // follow the new particle set.
   void afterRedistribution();
@@ -183,6 +189,7 @@ class SphSystem final : public OdeSystem, public StateEvaluator {
   std::uint64_t rhs_evals_ = 0;
   bool last_evaluation_implicit_ = false;  // see StateEvaluator::lastEvaluationImplicit
   bool redistribute_pending_ = false;      // a distributed run's halo must be rebuilt before the next step
+  bool particle_changes_anywhere_ = false; // and some process's hooks add or remove particles
   std::uint64_t next_id_ = 0;
   ParticleChanges changes_;
   ParticleRemap remap_;
