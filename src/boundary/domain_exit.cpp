@@ -45,7 +45,9 @@ std::string DomainExit<D>::describe() const {
 
 template <int D>
 void DomainExit<D>::saveCarried(NamedArrays& out) const {
-  out.emplace_back("escaped", std::vector<double>{static_cast<double>(escaped_)});
+  // A run across processes: the whole run's count (collective), which process 0 takes back.
+  const double escaped = static_cast<double>(escaped_);
+  out.emplace_back("escaped", std::vector<double>{this->distribution() ? this->distribution()->sum(escaped) : escaped});
 }
 
 template <int D>
@@ -53,7 +55,8 @@ void DomainExit<D>::restoreCarried(const ArrayLookup& find) {
   // Absent in a checkpoint written while leave_domain was "stop" (nothing was removed then).
   const std::vector<double>* e = find("escaped");
   if (e && e->size() != 1) throw InputError("--resume: the checkpoint's count of escaped particles is malformed");
-  escaped_ = e ? static_cast<std::uint64_t>((*e)[0]) : 0;
+  const bool mine = !this->distribution() || this->distribution()->rank() == 0;  // counted once
+  escaped_ = e && mine ? static_cast<std::uint64_t>((*e)[0]) : 0;
 }
 
 // What happens to a fluid particle that leaves the domain ([checks] leave_domain; registered in

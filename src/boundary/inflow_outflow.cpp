@@ -366,7 +366,10 @@ void InflowOutflow<D>::resized(StepContext<D>& system, const ParticleRemap& rema
 
 template <int D>
 void InflowOutflow<D>::saveCarried(NamedArrays& out) const {
-  out.emplace_back("totals", std::vector<double>{static_cast<double>(released_), static_cast<double>(removed_)});
+  // A run across processes: the whole run's totals (collective), which process 0 takes back.
+  std::vector<double> totals{static_cast<double>(released_), static_cast<double>(removed_)};
+  if (this->distribution()) this->distribution()->sum(totals);
+  out.emplace_back("totals", totals);
   if (!lane_speed_.empty()) out.emplace_back("lane_speed", lane_speed_);
 }
 
@@ -374,8 +377,9 @@ template <int D>
 void InflowOutflow<D>::restoreCarried(const ArrayLookup& find) {
   const std::vector<double>* totals = find("totals");
   if (!totals || totals->size() != 2) throw InputError("--resume: the checkpoint lacks the inflow/outflow totals");
-  released_ = static_cast<std::uint64_t>((*totals)[0]);
-  removed_ = static_cast<std::uint64_t>((*totals)[1]);
+  const bool mine = !this->distribution() || this->distribution()->rank() == 0;  // the totals are counted once
+  released_ = mine ? static_cast<std::uint64_t>((*totals)[0]) : 0;
+  removed_ = mine ? static_cast<std::uint64_t>((*totals)[1]) : 0;
   if (!lane_speed_.empty()) {
     const std::vector<double>* speeds = find("lane_speed");
     if (!speeds || speeds->size() != lane_speed_.size()) throw InputError("--resume: the checkpoint lacks the inflow lanes' speeds");

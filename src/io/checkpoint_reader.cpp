@@ -87,7 +87,18 @@ std::uint64_t checkpointChecksum(const Checkpoint& part, const CheckpointRows& r
   std::sort(arrays.begin(), arrays.end(), [](const auto* a, const auto* b) { return a->first < b->first; });
   for (const auto* a : arrays) {
     h.add(a->first.data(), a->first.size() + 1);
-    stateLaidOut(a->second);
+    const long layout = rows.layoutOf(a->first);
+    if (layout == 0) {
+      stateLaidOut(a->second);
+    } else if (layout > 0) {  // the frame's rows: every moving row, then every fixed one
+      const auto cols = static_cast<std::size_t>(layout);
+      const std::uint64_t n = ids * cols;
+      h.add(&n, sizeof n);
+      inTurn(a->second.data(), n_moving * cols * sizeof(double));
+      inTurn(a->second.data() + n_moving * cols, (part.id.size() - n_moving) * cols * sizeof(double));
+    } else {  // the same on every process
+      h.addVector(a->second);
+    }
   }
   return h.hash;
 #else

@@ -87,7 +87,7 @@ void OutputWriter<D>::appendGauges(const std::vector<std::vector<double>>& rows)
         hsize_t offset[1] = {gauge_rows_}, count[1] = {1};
         H5Sselect_hyperslab(fspace, H5S_SELECT_SET, offset, nullptr, count, nullptr);
         Handle mspace(checkId(H5Screate_simple(1, count, nullptr), cname), H5Sclose);
-        if (writesSharedRows()) check(H5Dwrite(d, H5T_NATIVE_DOUBLE, mspace, fspace, H5P_DEFAULT, &rows[k][c]), "gauges");
+        writeSharedRows(d, mspace, fspace, &rows[k][c], "gauges");
       }
     }
   } catch (const std::runtime_error&) {

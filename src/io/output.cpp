@@ -74,7 +74,12 @@ void datasetPieces(hid_t group, const char* name, hid_t file_type, hid_t mem_typ
 // writeResizable of a dataset that every process writes its pieces of.
 void writeResizablePieces(hid_t group, const char* name, hid_t file_type, hid_t mem_type, const void* data,
                           std::size_t rows, const std::vector<RowPiece>& pieces) {
-  Handle d(H5Lexists(group, name, H5P_DEFAULT) > 0 ? checkId(H5Dopen2(group, name, H5P_DEFAULT), name)
+  // Without a chunk cache: with one, HDF5 1.10 wrote a chunk that a change of extent had
+  // pruned back over the values written after it (a changing particle set's checkpoint held
+  // the earlier one's values).
+  Handle uncached(checkId(H5Pcreate(H5P_DATASET_ACCESS), name), H5Pclose);
+  check(H5Pset_chunk_cache(uncached, 0, 0, 1.0), name);
+  Handle d(H5Lexists(group, name, H5P_DEFAULT) > 0 ? checkId(H5Dopen2(group, name, uncached), name)
                                                     : createExtensible(group, name, file_type, 1 << 16),
            H5Dclose);
   hsize_t size[1] = {rows};
@@ -109,6 +114,80 @@ void OutputWriter<D>::openAccess(std::int64_t fapl) const {
 }
 
 template <int D>
+void OutputWriter<D>::writeSharedRows(std::int64_t d, std::int64_t mspace, std::int64_t fspace, const void* data,
+                                      const char* what, std::int64_t mem_type) const {
+  if (mem_type < 0) mem_type = H5T_NATIVE_DOUBLE;
+  if (!communicator_) {
+    check(H5Dwrite(d, mem_type, mspace, fspace, H5P_DEFAULT, data), what);
+    return;
+  }
+#if VESPH_HAVE_MPI_RUNS
+  if (!writesSharedRows()) {
+    check(H5Sselect_none(fspace), what);
+    check(H5Sselect_none(mspace), what);
+  }
+  Handle xfer(checkId(H5Pcreate(H5P_DATASET_XFER), what), H5Pclose);
+  check(H5Pset_dxpl_mpio(xfer, H5FD_MPIO_COLLECTIVE), what);
+  check(H5Dwrite(d, mem_type, mspace, fspace, xfer, data), what);
+#endif
+}
+
+template <int D>
+void OutputWriter<D>::remakeForProcesses() {
+  auto remake = [&](hid_t group, const std::string& name) {
+    std::size_t rows = 0;
+    hsize_t chunk[1] = {0};
+    hid_t file_type_id = -1, mem_type_id = -1;
+    std::vector<unsigned char> values;
+    {
+      Handle d(checkId(H5Dopen2(group, name.c_str(), H5P_DEFAULT), name.c_str()), H5Dclose);
+      Handle dcpl(checkId(H5Dget_create_plist(d), name.c_str()), H5Pclose);
+      H5D_alloc_time_t alloc = H5D_ALLOC_TIME_DEFAULT;
+      check(H5Pget_alloc_time(dcpl, &alloc), name.c_str());
+      if (H5Pget_layout(dcpl) != H5D_CHUNKED || alloc == H5D_ALLOC_TIME_EARLY) return;
+      if (H5Pget_chunk(dcpl, 1, chunk) != 1) return;  // not one of vesph's extensible columns
+      rows = datasetRows(group, name.c_str());
+      Handle ft(checkId(H5Dget_type(d), name.c_str()), H5Tclose);
+      Handle mt(checkId(H5Tget_native_type(ft, H5T_DIR_ASCEND), name.c_str()), H5Tclose);
+      values.resize(std::max<std::size_t>(rows, 1) * H5Tget_size(mt));
+      if (rows) check(H5Dread(d, mt, H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data()), name.c_str());
+      file_type_id = H5Tcopy(ft);
+      mem_type_id = H5Tcopy(mt);
+    }
+    Handle file_type(file_type_id, H5Tclose), mem_type(mem_type_id, H5Tclose);
+    check(H5Ldelete(group, name.c_str(), H5P_DEFAULT), name.c_str());
+    Handle d(createExtensible(group, name.c_str(), file_type, chunk[0]), H5Dclose);
+    const hsize_t size[1] = {rows};
+    check(H5Dset_extent(d, size), name.c_str());
+    if (!rows) return;
+    Handle fspace(checkId(H5Dget_space(d), name.c_str()), H5Sclose);
+    Handle mspace(checkId(H5Screate_simple(1, size, nullptr), name.c_str()), H5Sclose);
+    writeSharedRows(d, mspace, fspace, values.data(), name.c_str(), mem_type);
+  };
+  auto remakeGroup = [&](const char* path) {
+    if (H5Lexists(file_, path, H5P_DEFAULT) <= 0) return;
+    Handle g(checkId(H5Gopen2(file_, path, H5P_DEFAULT), path), H5Gclose);
+    H5G_info_t info;
+    check(H5Gget_info(g, &info), path);
+    std::vector<std::string> names;
+    for (hsize_t k = 0; k < info.nlinks; ++k) {
+      char name[256];
+      const ssize_t len = H5Lget_name_by_idx(g, ".", H5_INDEX_NAME, H5_ITER_INC, k, name, sizeof name, H5P_DEFAULT);
+      if (len > 0 && static_cast<std::size_t>(len) < sizeof name) names.emplace_back(name);
+    }
+    for (const std::string& name : names) {
+      H5O_info_t object;
+      if (H5Oget_info_by_name(g, name.c_str(), &object, H5P_DEFAULT) < 0) continue;
+      if (object.type == H5O_TYPE_DATASET) remake(g, name);
+    }
+  };
+  remakeGroup("diagnostics");
+  remakeGroup("checkpoint");
+  remakeGroup("checkpoint/arrays");
+  for (const GaugeSeries& gauge : gauges_) remakeGroup(("gauges/" + gauge.name).c_str());
+}
+
+template <int D>
 bool OutputWriter<D>::agreed(bool ok) const {
 #if VESPH_HAVE_MPI_RUNS
   if (communicator_) {
@@ -140,6 +219,7 @@ OutputWriter<D>::OutputWriter(const std::string& dir, const std::string& name, c
     throw std::runtime_error("cannot open " + h5_path_ + " for writing");
   }
   try {
+    if (communicator_) remakeForProcesses();
     reopen(attrs, resume_time);
   } catch (const InputError& e) {
     close();
@@ -193,7 +273,14 @@ void OutputWriter<D>::reopen(const FileAttributes& attrs, double resume_time) {
       // checks.leave_domain became "remove" on resume; nothing escaped before, so its rows are 0.
       const std::vector<double> zeros(diag_rows_, 0.0);
       writeResizable(diag, col.c_str(), H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, zeros.data(), zeros.size(), 4096,
-                     writesSharedRows());
+                     !communicator_);
+      if (communicator_ && diag_rows_ > 0) {
+        Handle d(checkId(H5Dopen2(diag, col.c_str(), H5P_DEFAULT), col.c_str()), H5Dclose);
+        Handle fspace(checkId(H5Dget_space(d), col.c_str()), H5Sclose);
+        const hsize_t count[1] = {diag_rows_};
+        Handle mspace(checkId(H5Screate_simple(1, count, nullptr), col.c_str()), H5Sclose);
+        writeSharedRows(d, mspace, fspace, zeros.data(), col.c_str());
+      }
       continue;
     }
     datasetRows(diag, col.c_str());  // rank 1, or malformed
@@ -230,10 +317,12 @@ void OutputWriter<D>::writeCheckpoint(const Checkpoint& c, const CheckpointRows*
     id_pieces = {{r.moving_offset, n_moving}, {r.moving_total + r.fixed_offset, c.id.size() - n_moving}};
     state_values = r.moving_total * width;
     id_rows = r.moving_total + r.fixed_total;
-    for (const auto& [aname, values] : c.arrays)
-      if (values.size() != c.state.size())
-        throw std::logic_error("OutputWriter::writeCheckpoint: the carried array " + aname +
-                               " of a file written together is not laid out as the state");
+    for (const auto& [aname, values] : c.arrays) {
+      const long layout = part->layoutOf(aname);
+      const std::size_t expected = layout == 0 ? c.state.size() : layout > 0 ? c.id.size() * static_cast<std::size_t>(layout) : values.size();
+      if (values.size() != expected)
+        throw std::logic_error("OutputWriter::writeCheckpoint: the carried array " + aname + " does not have its layout's size");
+    }
     checksum = checkpointChecksum(c, *part, communicator_);
   } else {
     checksum = checkpointChecksum(c);
@@ -262,9 +351,27 @@ void OutputWriter<D>::writeCheckpoint(const Checkpoint& c, const CheckpointRows*
                      ? checkId(H5Gopen2(g, "arrays", H5P_DEFAULT), "checkpoint arrays")
                      : checkId(H5Gcreate2(g, "arrays", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), "checkpoint arrays"),
                  H5Gclose);
-      for (const auto& [aname, values] : c.arrays)
-        put(arr, aname.c_str(), H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, values.data(), values.size(), state_values,
-            state_pieces);
+      for (const auto& [aname, values] : c.arrays) {
+        if (!part) {
+          put(arr, aname.c_str(), H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, values.data(), values.size(), 0, {});
+          continue;
+        }
+        // The array's pieces by its layout (CheckpointRows::layoutOf).
+        const long layout = part->layoutOf(aname);
+        if (layout == 0) {
+          put(arr, aname.c_str(), H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, values.data(), values.size(), state_values,
+              state_pieces);
+        } else if (layout > 0) {
+          const auto cols = static_cast<std::size_t>(layout);
+          std::vector<RowPiece> pieces;
+          for (const RowPiece& p : id_pieces) pieces.push_back({p.offset * cols, p.count * cols});
+          put(arr, aname.c_str(), H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, values.data(), values.size(), id_rows * cols, pieces);
+        } else {
+          const std::vector<RowPiece> pieces =
+              writesSharedRows() ? std::vector<RowPiece>{{0, values.size()}} : std::vector<RowPiece>{};
+          put(arr, aname.c_str(), H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, values.data(), values.size(), values.size(), pieces);
+        }
+      }
     }
     // Arrays of an earlier checkpoint that this one does not carry (the integrator's rate after
     // a divergence) are removed: they are not part of this restart point, nor of its checksum.
@@ -419,7 +526,7 @@ void OutputWriter<D>::appendDiagnostics(const std::vector<DiagnosticsRow>& rows)
     hsize_t offset[1] = {diag_rows_}, count[1] = {rows.size()};
     H5Sselect_hyperslab(fspace, H5S_SELECT_SET, offset, nullptr, count, nullptr);
     Handle mspace(checkId(H5Screate_simple(1, count, nullptr), cname), H5Sclose);
-    if (writesSharedRows()) check(H5Dwrite(d, H5T_NATIVE_DOUBLE, mspace, fspace, H5P_DEFAULT, col.data()), "diagnostics");
+    writeSharedRows(d, mspace, fspace, col.data(), "diagnostics");
   }
   diag_rows_ += rows.size();
 }

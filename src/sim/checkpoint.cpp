@@ -70,7 +70,9 @@ Checkpoint Checkpoints<D>::at(double t, Checkpoint totals) const {
 
 namespace {
 constexpr const char* kRowsPrefix = "checkpoint:";
-}
+// The carried arrays laid out as the state (the integrator's rate): they travel as rows.
+bool stateLaidOut(const std::string& name) { return name == "integrator.carried"; }
+}  // namespace
 
 template <int D>
 void Checkpoints<D>::attachRows(ParticleSet<D>& owned, const Checkpoint& local) const {
@@ -81,17 +83,28 @@ void Checkpoints<D>::attachRows(ParticleSet<D>& owned, const Checkpoint& local) 
   if (local.state.size() != n * width) throw std::logic_error("Checkpoints::attachRows: not this process's checkpoint");
   auto attach = [&](const std::string& name, const std::vector<double>& values) {
     if (values.size() != local.state.size())
-      throw std::logic_error("checkpoint array " + name + ": a run across processes carries only arrays laid out as the state");
+      throw std::logic_error("checkpoint array " + name + " is not laid out as the state");
     Field& rows = owned.fields.require(kRowsPrefix + name, static_cast<int>(width), Field::Range::moving);
     rows.data.assign(owned.n_moving * width, 0.0);
     forEachStateValue(n, widths, [&](std::size_t k, std::size_t i, std::size_t col) { rows.at(i)[col] = values[k]; });
   };
   attach("state", local.state);
-  for (const auto& [aname, values] : local.arrays) attach(aname, values);
+  for (const auto& [aname, values] : local.arrays)
+    if (stateLaidOut(aname)) attach(aname, values);
 }
 
 template <int D>
-Checkpoint Checkpoints<D>::shareCheckpoint(const ParticleSet<D>& share, const Checkpoint& local) const {
+CheckpointRows Checkpoints<D>::shareLayout(const OutputShare<D>& share) const {
+  CheckpointRows rows{{share.moving_offset, share.moving_total, share.fixed_offset, share.fixed_total},
+                      system_.segmentWidths(), {"integrator.carried"}, {}};
+  if (system_.changesParticleSet())
+    rows.particle_arrays = {{"particles.position", D}, {"particles.velocity", D}, {"particles.mass", 1}};
+  return rows;
+}
+
+template <int D>
+Checkpoint Checkpoints<D>::shareCheckpoint(const OutputShare<D>& dealt, const Checkpoint& local) const {
+  const ParticleSet<D>& share = dealt.particles;
   const std::vector<std::size_t> widths = system_.segmentWidths();
   auto detach = [&](const std::string& name) {
     const Field* rows = share.fields.find(kRowsPrefix + name);
@@ -111,7 +124,19 @@ Checkpoint Checkpoints<D>::shareCheckpoint(const ParticleSet<D>& share, const Ch
   c.resumes = local.resumes;
   c.state = detach("state");
   c.id = share.id;
-  for (const auto& a : local.arrays) c.arrays.emplace_back(a.first, detach(a.first));
+  // The arrays: the integrator's rate laid out as the state; a changing particle set's
+  // per-particle arrays from the share's particles (the frame's rows); the rest (the particle
+  // count, the next id, the hooks' totals) the same on every process.
+  for (const auto& a : local.arrays) {
+    const std::string& name = a.first;
+    if (stateLaidOut(name)) c.arrays.emplace_back(name, detach(name));
+    else if (name == "particles.position") c.arrays.emplace_back(name, share.position);
+    else if (name == "particles.velocity") c.arrays.emplace_back(name, share.velocity);
+    else if (name == "particles.mass") c.arrays.emplace_back(name, share.mass);
+    else if (name == "particles.n_moving")
+      c.arrays.emplace_back(name, std::vector<double>{static_cast<double>(dealt.moving_total)});
+    else c.arrays.push_back(a);
+  }
   return c;
 }
 
@@ -289,10 +314,6 @@ void Checkpoints<D>::resumeDistributed(Checkpoint& ck) {
 
 template <int D>
 Checkpoint Checkpoints<D>::resume(const std::string& dir, const ResumeRules& rules) {
-  if (system_.distribution && system_.changesParticleSet())
-    throw InputError("--resume: a run across processes whose particle set changes (inflow, outflow, "
-                     "checks.leave_domain = \"remove\") writes no checkpoint yet; resume it as one process from a serial "
-                     "run's file, or start it again");
   ResumeSource src = readResumeSource(dir, rules.scene_name);
   where_ = dir + "/" + rules.scene_name + ".h5";
   const std::string diff =
@@ -309,11 +330,18 @@ Checkpoint Checkpoints<D>::resume(const std::string& dir, const ResumeRules& rul
     ~ClearOnExit() { slot = nullptr; }
   } clear_on_exit{resuming_};
   validate(src, rules);
-  if (system_.distribution) {
+  // A distributed scene whose particle set changes: the checkpoint's particle set is restored
+  // into the whole scene, as serially, and then distributed (resumeWhole).
+  const bool whole = system_.distribution && system_.hasWholeScene();
+  if (system_.distribution && !whole) {
     validatePositions(ck, rules);
     resumeDistributed(ck);
     restore(ck, RestoreStage::scene);
     return std::move(src.checkpoint);
+  }
+  if (whole) {
+    system_.takeWholeScene();
+    state_.resize(system_.size());
   }
   restore(ck, RestoreStage::particle_set);
   if (ck.find("domain_exit.escaped") && !rules.removes_leaving)
@@ -323,6 +351,17 @@ Checkpoint Checkpoints<D>::resume(const std::string& dir, const ResumeRules& rul
   validatePositions(ck, rules);
   // Between-step arrays of effects (the lagged SOF acceleration) go back where they were.
   restore(ck, RestoreStage::scene);
+  if (whole) {
+    state_.values() = ck.state;
+    system_.unpack(state_.data());
+    system_.distribute();  // the restored set shared out again
+    state_.resize(system_.size());
+    system_.pack(state_.data());
+    for (auto& [aname, values] : ck.arrays)
+      if (aname == "integrator.carried") values = ownedPart(ck, values);
+    ck.state.clear();
+    return std::move(src.checkpoint);
+  }
   state_.values() = std::move(ck.state);
   system_.unpack(state_.data());
   return std::move(src.checkpoint);

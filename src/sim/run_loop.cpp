@@ -135,18 +135,13 @@ bool RunLoop<D>::writeFrame(double t, bool only_if_finite) {
     // A run across processes: the owned particles, their checkpoint rows with them, are dealt
     // out by id (each process then writes one run of the frame's rows, in a serial run's order)
     // and every process writes its share of the one file.
-    // A scene whose particle set changes (inflow, outflow, particles leaving the domain) writes
-    // no checkpoint across processes yet: its restart point is the particle set itself.
-    const bool checkpoint = !sys.changesParticleSet();
-    const Checkpoint local = checkpoint ? sim_.checkpoints_.at(t, totals(t)) : Checkpoint{};
+    const Checkpoint local = sim_.checkpoints_.at(t, totals(t));
     ParticleSet<D> owned = distribution_->owned(sys.particles);
-    if (checkpoint) sim_.checkpoints_.attachRows(owned, local);
+    sim_.checkpoints_.attachRows(owned, local);
     const OutputShare<D> share = distribution_->deal(std::move(owned));
-    const FrameRows rows{share.moving_offset, share.moving_total, share.fixed_offset, share.fixed_total};
-    writer_->writeFrame(t, static_cast<std::int64_t>(steps_), share.particles, pending_, &rows);
-    const CheckpointRows checkpoint_rows{rows, sys.segmentWidths()};
-    if (checkpoint)
-      writer_->writeCheckpoint(sim_.checkpoints_.shareCheckpoint(share.particles, local), &checkpoint_rows);
+    const CheckpointRows checkpoint_rows = sim_.checkpoints_.shareLayout(share);
+    writer_->writeFrame(t, static_cast<std::int64_t>(steps_), share.particles, pending_, &checkpoint_rows.rows);
+    writer_->writeCheckpoint(sim_.checkpoints_.shareCheckpoint(share, local), &checkpoint_rows);
   }
   pending_.clear();
   return true;
@@ -223,6 +218,7 @@ bool RunLoop<D>::accepted(double t, double dt, const double* y) {
 // are absent from a checkpoint written before the hook was switched on).
 template <int D>
 void RunLoop<D>::startIntegration() {
+  sim_.system_.releaseWholeScene();  // kept for a resume only (SphSystem::takeWholeScene)
   sim_.system_.startHooks(t0_, sim_.state_.data());
   if (opt_.resume) sim_.checkpoints_.restore(resumed_, RestoreStage::hooks_started);
   sim_.integrator_->start(ode_, t0_, sim_.state_.data());

@@ -86,6 +86,32 @@ void SphSystem<D>::setup(double spacing, double rest_density, double viscosity, 
   driver.prepare(neighbours);
 }
 
+namespace {
+// Every array and field of `from` into `to` (its fields, created where missing, keep their
+// addresses).
+template <int D>
+void copyParticles(const ParticleSet<D>& from, ParticleSet<D>& to) {
+  for (const auto& f : from.fields.all()) {
+    Field& g = to.fields.require(f->name, f->components, f->range);
+    g = *f;
+  }
+  to.position = from.position;
+  to.velocity = from.velocity;
+  to.density = from.density;
+  to.mass = from.mass;
+  to.kind = from.kind;
+  to.id = from.id;
+  to.n_moving = from.n_moving;
+  to.n_ghost_moving = from.n_ghost_moving;
+  to.n_ghost_fixed = from.n_ghost_fixed;
+  for (const auto& g : to.fields.all())  // a field `from` lacks: zeros over its range
+    if (!from.fields.find(g->name)) {
+      const std::size_t n = g->range == Field::Range::all ? to.size() : g->range == Field::Range::moving ? to.n_moving : to.nFixed();
+      g->data.assign(n * static_cast<std::size_t>(g->components), 0.0);
+    }
+}
+}  // namespace
+
 template <int D>
 void SphSystem<D>::distribute() {
   if (!distribution) return;
@@ -93,8 +119,22 @@ void SphSystem<D>::distribute() {
     hk->setDistribution(distribution.get());
     hk->distributing(particles);
   }
+  if (changesParticleSet() && !whole_scene_) {  // the first distribution only
+    whole_scene_.emplace();
+    copyParticles(particles, *whole_scene_);
+  }
   distribution->distribute(particles);
   afterRedistribution();
+}
+
+
+template <int D>
+void SphSystem<D>::takeWholeScene() {
+  if (!whole_scene_) throw std::logic_error("SphSystem::takeWholeScene: the whole scene was not kept");
+  distribution->removeHalo(particles);
+  copyParticles(*whole_scene_, particles);  // into the same fields: effects hold pointers to them
+  whole_scene_.reset();
+  afterRedistribution();  // effects, boundaries, neighbours and hooks follow the whole set
 }
 
 // A distributed scene keeps no particle index anywhere (Simulation::distribute refuses what

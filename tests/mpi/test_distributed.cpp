@@ -291,6 +291,12 @@ Checkpoint wholeCheckpoint(std::size_t n_moving, std::size_t n_fixed, const std:
     for (std::size_t k = 0; k < v.size(); ++k) v[k] = std::cos(0.11 * static_cast<double>(k) + name[0]);
     c.arrays.emplace_back(name, v);
   }
+  // Two values per particle in the frame's rows (a changing set's positions), and totals the
+  // same on every process.
+  std::vector<double> rows(2 * (n_moving + n_fixed));
+  for (std::size_t k = 0; k < rows.size(); ++k) rows[k] = 0.5 * static_cast<double>(k) - 3.0;
+  c.arrays.emplace_back("particles.position", rows);
+  c.arrays.emplace_back("b.totals", std::vector<double>{3.0, 4.0, 5.0});
   return c;
 }
 
@@ -314,7 +320,18 @@ Checkpoint checkpointPart(const Checkpoint& whole, std::size_t n_moving, std::si
   };
   Checkpoint part = whole;
   part.state = laidOut(whole.state);
-  for (auto& [name, values] : part.arrays) values = laidOut(values);
+  for (auto& [name, values] : part.arrays) {
+    if (name == "b.totals") continue;  // the same on every process
+    if (name == "particles.position") {  // the process's moving rows, then its fixed rows
+      std::vector<double> mine(values.begin() + static_cast<std::ptrdiff_t>(2 * m0),
+                               values.begin() + static_cast<std::ptrdiff_t>(2 * m1));
+      mine.insert(mine.end(), values.begin() + static_cast<std::ptrdiff_t>(2 * (n_moving + f0)),
+                  values.begin() + static_cast<std::ptrdiff_t>(2 * (n_moving + f1)));
+      values = mine;
+      continue;
+    }
+    values = laidOut(values);
+  }
   part.id.assign(whole.id.begin() + static_cast<std::ptrdiff_t>(m0), whole.id.begin() + static_cast<std::ptrdiff_t>(m1));
   part.id.insert(part.id.end(), whole.id.begin() + static_cast<std::ptrdiff_t>(n_moving + f0),
                  whole.id.begin() + static_cast<std::ptrdiff_t>(n_moving + f1));
@@ -331,7 +348,7 @@ TEST_CASE("distributed output: the checkpoint written together is the whole one,
   const Checkpoint whole = wholeCheckpoint(n_moving, n_fixed, widths);
   FrameRows rows;
   const Checkpoint part = checkpointPart(whole, n_moving, n_fixed, widths, comm, rows);
-  const CheckpointRows checkpoint_rows{rows, widths};
+  const CheckpointRows checkpoint_rows{rows, widths, {"integrator.carried", "a.rate"}, {{"particles.position", 2}}};
   CHECK(checkpointChecksum(part, checkpoint_rows, &handle) == checkpointChecksum(whole));
 
   // The frame and the checkpoint written by every process into one file read back as the whole.
@@ -353,7 +370,7 @@ TEST_CASE("distributed output: the checkpoint written together is the whole one,
   const ResumeSource back = readResumeSource(dir.string(), "together");
   CHECK(back.checkpoint.state == whole.state);
   CHECK(back.checkpoint.id == whole.id);
-  REQUIRE(back.checkpoint.arrays.size() == 2);
+  REQUIRE(back.checkpoint.arrays.size() == whole.arrays.size());
   for (const auto& [name, values] : whole.arrays) {
     REQUIRE(back.checkpoint.find(name) != nullptr);
     CHECK(*back.checkpoint.find(name) == values);

@@ -106,10 +106,24 @@ struct FrameRows {
 // A process's part of a checkpoint: its moving particles' state values are the rows
 // [moving_offset, moving_offset + n) of each state segment (StateSegments: positions |
 // densities | velocities | evolving fields, `segment_widths` values per particle each); its ids
-// are the frame's rows. Every carried array is laid out as the state.
+// are the frame's rows. A carried array is laid out as the state (the integrator's rate), as
+// the frame's rows with a number of values per particle (`particle_arrays`: a changing
+// particle set's positions, velocities, masses), or else is the same on every process (the
+// particle count, the hooks' totals; process 0 writes it).
 struct CheckpointRows {
   FrameRows rows;
   std::vector<std::size_t> segment_widths;
+  std::vector<std::string> state_arrays;                              // laid out as the state
+  std::vector<std::pair<std::string, std::size_t>> particle_arrays;  // name, values per particle
+  // The layout of a carried array: 0 the state's; > 0 the frame rows' with that many values per
+  // particle; -1 the same on every process.
+  long layoutOf(const std::string& name) const {
+    for (const std::string& n : state_arrays)
+      if (n == name) return 0;
+    for (const auto& [n, cols] : particle_arrays)
+      if (n == name) return static_cast<long>(cols);
+    return -1;
+  }
 };
 
 // The checksum of a checkpoint whose values are spread over processes, each holding `part`, its
@@ -179,6 +193,16 @@ class OutputWriter {
   // `ok` agreed on (false when any is false).
   void openAccess(std::int64_t fapl) const;
   bool writesSharedRows() const { return rank_ == 0; }
+  // Writes rows every process holds alike (fspace: their selection in dataset d): process 0's,
+  // in one collective transfer that every process makes (so that every process takes part in
+  // allocating the chunks it needs, also in a file a serial run began); serially, a plain write.
+  void writeSharedRows(std::int64_t d, std::int64_t mspace, std::int64_t fspace, const void* data, const char* what,
+                       std::int64_t mem_type = -1) const;
+  // A file that a serial run (or an older vesph) began, continued by several processes: its
+  // extensible datasets, whose chunks a serial run allocates as it first writes them, are made
+  // again as processes writing together make them (allocated as they are created and
+  // extended: otherwise each process would allocate on its own). Collective; values kept.
+  void remakeForProcesses();
   bool agreed(bool ok) const;
 
   const void* communicator_ = nullptr;

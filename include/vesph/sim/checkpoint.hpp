@@ -65,7 +65,9 @@ class Checkpoints {
   // them (shareCheckpoint), its state and arrays in the state's layout over the share's moving
   // particles, its ids the share's.
   void attachRows(ParticleSet<D>& owned, const Checkpoint& local) const;
-  Checkpoint shareCheckpoint(const ParticleSet<D>& share, const Checkpoint& local) const;
+  Checkpoint shareCheckpoint(const OutputShare<D>& share, const Checkpoint& local) const;
+  // Where the share's checkpoint values go in the file (OutputWriter::writeCheckpoint).
+  CheckpointRows shareLayout(const OutputShare<D>& share) const;
 
   // --resume: the checkpoint in `dir` replaces the initial state (the state, the particle set,
   // the effects' arrays). Everything is checked before a file is touched: a refused resume is

@@ -69,6 +69,14 @@ class SphSystem final : public OdeSystem, public StateEvaluator {
   // with its halo, and rebuilds the neighbour list. Collective; after setup and before the
   // state is packed.
   void distribute();
+  // A distributed scene whose particle set changes (inflow, outflow) keeps the whole scene as
+  // built until the run starts: `--resume` restores a checkpoint into it (the particle set of
+  // the checkpoint, as a serial run does) and distributes it again. takeWholeScene replaces
+  // this process's share by it (no distribution afterwards until distribute());
+  // releaseWholeScene frees it.
+  bool hasWholeScene() const { return whole_scene_.has_value(); }
+  void takeWholeScene();
+  void releaseWholeScene() { whole_scene_.reset(); }
 
   std::size_t size() const override;
   StateSegments segments() const override;
@@ -191,6 +199,7 @@ class SphSystem final : public OdeSystem, public StateEvaluator {
   bool redistribute_pending_ = false;      // a distributed run's halo must be rebuilt before the next step
   bool particle_changes_anywhere_ = false; // and some process's hooks add or remove particles
   std::uint64_t next_id_ = 0;
+  std::optional<ParticleSet<D>> whole_scene_;  // see takeWholeScene
   ParticleChanges changes_;
   ParticleRemap remap_;
   std::vector<char> removed_flag_;
