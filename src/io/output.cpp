@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <span>
 #include <sstream>
 #include <stdexcept>
 #include <type_traits>
@@ -43,16 +44,17 @@ struct RowPiece {
 // Writes this process's pieces of rows (cols values each; 0: a dataset of rank 1) of the open
 // dataset d from `data` (their values one piece after the other), in one collective transfer
 // that every process of the file makes (with no piece, it writes nothing).
-void writePieces(hid_t d, hid_t mem_type, const void* data, std::size_t cols, std::initializer_list<RowPiece> pieces,
+void writePieces(hid_t d, hid_t mem_type, const void* data, std::size_t cols, std::span<const RowPiece> pieces,
                  const char* name) {
   Handle fspace(checkId(H5Dget_space(d), name), H5Sclose);
   check(H5Sselect_none(fspace), name);
+  const int rank = H5Sget_simple_extent_ndims(fspace);
   hsize_t values = 0;
   for (const RowPiece& r : pieces) {
     if (r.count == 0) continue;
     const hsize_t start[2] = {r.offset, 0}, count[2] = {r.count, cols};
     check(H5Sselect_hyperslab(fspace, H5S_SELECT_OR, start, nullptr, count, nullptr), name);
-    values += r.count * std::max<hsize_t>(cols, 1);
+    values += r.count * (rank == 2 ? cols : 1);
   }
   const hsize_t mem_dims[1] = {std::max<hsize_t>(values, 1)};
   Handle mspace(checkId(H5Screate_simple(1, mem_dims, nullptr), name), H5Sclose);
@@ -68,7 +70,7 @@ void datasetPieces(hid_t group, const char* name, hid_t file_type, hid_t mem_typ
   hsize_t dims[2] = {rows, cols};
   Handle space(checkId(H5Screate_simple(cols ? 2 : 1, dims, nullptr), name), H5Sclose);
   Handle d(checkId(H5Dcreate2(group, name, file_type, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), name), H5Dclose);
-  writePieces(d, mem_type, data, cols, pieces, name);
+  writePieces(d, mem_type, data, cols, std::span<const RowPiece>(pieces.begin(), pieces.size()), name);
 }
 
 // writeResizable of a dataset that every process writes its pieces of.
@@ -84,21 +86,7 @@ void writeResizablePieces(hid_t group, const char* name, hid_t file_type, hid_t 
            H5Dclose);
   hsize_t size[1] = {rows};
   check(H5Dset_extent(d, size), name);
-  Handle fspace(checkId(H5Dget_space(d), name), H5Sclose);
-  check(H5Sselect_none(fspace), name);
-  hsize_t values = 0;
-  for (const RowPiece& r : pieces) {
-    if (r.count == 0) continue;
-    const hsize_t start[1] = {r.offset}, count[1] = {r.count};
-    check(H5Sselect_hyperslab(fspace, H5S_SELECT_OR, start, nullptr, count, nullptr), name);
-    values += r.count;
-  }
-  const hsize_t mem_dims[1] = {std::max<hsize_t>(values, 1)};
-  Handle mspace(checkId(H5Screate_simple(1, mem_dims, nullptr), name), H5Sclose);
-  if (values == 0) check(H5Sselect_none(mspace), name);
-  Handle xfer(checkId(H5Pcreate(H5P_DATASET_XFER), name), H5Pclose);
-  check(H5Pset_dxpl_mpio(xfer, H5FD_MPIO_COLLECTIVE), name);
-  check(H5Dwrite(d, mem_type, mspace, fspace, xfer, data), name);
+  writePieces(d, mem_type, data, 0, pieces, name);
 }
 #endif
 }  // namespace
