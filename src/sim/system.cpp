@@ -127,7 +127,6 @@ void SphSystem<D>::distribute() {
   afterRedistribution();
 }
 
-
 template <int D>
 void SphSystem<D>::takeWholeScene() {
   if (!whole_scene_) throw std::logic_error("SphSystem::takeWholeScene: the whole scene was not kept");
