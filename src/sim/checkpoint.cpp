@@ -70,8 +70,9 @@ Checkpoint Checkpoints<D>::at(double t, Checkpoint totals) const {
 
 namespace {
 constexpr const char* kRowsPrefix = "checkpoint:";
-// The carried arrays laid out as the state (the integrator's rate): they travel as rows.
-bool stateLaidOut(const std::string& name) { return name == "integrator.carried"; }
+// The carried array laid out as the state (the integrator's rate): it travels as rows.
+constexpr const char* kStateLaidOut = "integrator.carried";
+bool stateLaidOut(const std::string& name) { return name == kStateLaidOut; }
 }  // namespace
 
 template <int D>
@@ -96,7 +97,7 @@ void Checkpoints<D>::attachRows(ParticleSet<D>& owned, const Checkpoint& local) 
 template <int D>
 CheckpointRows Checkpoints<D>::shareLayout(const OutputShare<D>& share) const {
   CheckpointRows rows{{share.moving_offset, share.moving_total, share.fixed_offset, share.fixed_total},
-                      system_.segmentWidths(), {"integrator.carried"}, {}};
+                      system_.segmentWidths(), {kStateLaidOut}, {}};
   if (system_.changesParticleSet())
     rows.particle_arrays = {{"particles.position", D}, {"particles.velocity", D}, {"particles.mass", 1}};
   return rows;
@@ -304,7 +305,7 @@ void Checkpoints<D>::resumeDistributed(Checkpoint& ck) {
   state_.resize(system_.size());
   system_.pack(state_.data());
   for (auto& [aname, values] : ck.arrays) {
-    if (aname != "integrator.carried")
+    if (!stateLaidOut(aname))
       throw InputError("--resume: the checkpoint in " + where_ + " carries '" + aname +
                        "', which a run across processes does not restore; resume it as one process");
     values = ownedPart(ck, values);
@@ -358,7 +359,7 @@ Checkpoint Checkpoints<D>::resume(const std::string& dir, const ResumeRules& rul
     state_.resize(system_.size());
     system_.pack(state_.data());
     for (auto& [aname, values] : ck.arrays)
-      if (aname == "integrator.carried") values = ownedPart(ck, values);
+      if (stateLaidOut(aname)) values = ownedPart(ck, values);
     ck.state.clear();
     return std::move(src.checkpoint);
   }
