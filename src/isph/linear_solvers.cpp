@@ -5,6 +5,7 @@
 #include <Eigen/UmfPackSupport>
 #include <cmath>
 #include <sstream>
+#include <stdexcept>
 #include <unsupported/Eigen/IterativeSolvers>
 
 #include "amg_solver.hpp"
@@ -179,6 +180,11 @@ LinearSolverOptions readLinearSolverOptions(ConfigTable& cfg) {
                           "' (it is a key of linear_solver = \"bicgstab\", \"cg\" or \"gmres\")");
   }
   return o;
+}
+
+SolveReport LinearSolver::solveAcross(const SparseRowMatrix&, bool, const DistributedRows&, const Eigen::VectorXd&,
+                                      Eigen::VectorXd&) {
+  throw std::logic_error("linear solver " + name() + " cannot solve across processes (preconditioner = \"amg\" can)");
 }
 
 const std::vector<LinearSolverInfo>& linearSolverRegistry() {

@@ -53,30 +53,71 @@ namespace {
 constexpr double kExactShift = 1e-10;
 }  // namespace
 
-void PressureUnknowns::number(std::size_t n, const double* surface_flag) {
+template <int D>
+void PressureUnknowns::number(const ParticleSet<D>& P, const double* surface_flag, ParticleDistribution<D>* dist) {
+  const std::size_t n = P.n_moving, owned = P.ownedMoving();
   unknown_of.assign(n, -1);
   particle_of.clear();
-  std::size_t surface = 0;
-  for (std::size_t i = 0; i < n; ++i)
-    if (surface_flag && surface_flag[i] > 0.5) ++surface;
+  auto onSurface = [&](std::size_t i) { return surface_flag && surface_flag[i] > 0.5; };
+  std::uint64_t surface = 0;
+  for (std::size_t i = 0; i < owned; ++i)
+    if (onSurface(i)) ++surface;
+  if (dist) surface = dist->sum(surface);
   // No Dirichlet particle at all: the pure Neumann problem fixes p only up to a constant;
-  // p = 0 at the first fluid particle fixes it.
+  // p = 0 at the fluid particle with the smallest id fixes it (the first of a serial run's
+  // order, and the same particle however the processes share the fluid).
   pinned = surface == 0;
-  for (std::size_t i = pinned ? 1 : 0; i < n; ++i) {
-    if (surface_flag && surface_flag[i] > 0.5) continue;
+  std::size_t pin = n;
+  if (pinned) {
+    for (std::size_t i = 0; i < owned; ++i)
+      if (pin == n || P.id[i] < P.id[pin]) pin = i;
+    if (dist) {
+      const double smallest = -dist->max(pin < n ? -static_cast<double>(P.id[pin]) : -1e300);
+      if (pin < n && static_cast<double>(P.id[pin]) != smallest) pin = n;
+    }
+  }
+  for (std::size_t i = 0; i < owned; ++i) {
+    if (i == pin || onSurface(i)) continue;
     unknown_of[i] = static_cast<int>(particle_of.size());
     particle_of.push_back(static_cast<int>(i));
   }
-  count = particle_of.size();
+  count = columns = particle_of.size();
+  global_count = count;
+  if (!dist) return;
+  // Global numbers: this process's rows follow those of the processes before it; the ghosts
+  // take their owners' numbers (-1: not an unknown) and become the further columns.
+  const std::vector<double> counts = dist->allGather(std::vector<double>{static_cast<double>(count)});
+  std::uint64_t first = 0;
+  global_count = 0;
+  for (std::size_t r = 0; r < counts.size(); ++r) {
+    if (static_cast<int>(r) < dist->rank()) first += static_cast<std::uint64_t>(counts[r]);
+    global_count += static_cast<std::uint64_t>(counts[r]);
+  }
+  global_number_.assign(n, -1.0);
+  for (std::size_t r = 0; r < count; ++r) global_number_[static_cast<std::size_t>(particle_of[r])] = static_cast<double>(first + r);
+  const HaloArray numbers{global_number_.data(), 1, Field::Range::moving};
+  dist->refreshArrays(std::span<const HaloArray>(&numbers, 1));
+  across.communicator = dist->communicator();
+  across.first_row = static_cast<std::int64_t>(first);
+  across.global_rows = static_cast<std::int64_t>(global_count);
+  across.column_global.resize(count);
+  for (std::size_t c = 0; c < count; ++c) across.column_global[c] = static_cast<std::int64_t>(first + c);
+  for (std::size_t i = owned; i < n; ++i) {
+    if (global_number_[i] < 0) continue;
+    unknown_of[i] = static_cast<int>(columns++);
+    across.column_global.push_back(static_cast<std::int64_t>(global_number_[i]));
+  }
 }
 
-double PressureUnknowns::rms(const std::vector<double>& per_particle) const {
+template <int D>
+double PressureUnknowns::rms(const std::vector<double>& per_particle, ParticleDistribution<D>* dist) const {
   double sum2 = 0;
   for (std::size_t r = 0; r < count; ++r) {
     const double d = per_particle[static_cast<std::size_t>(particle_of[r])];
     sum2 += d * d;
   }
-  return count ? std::sqrt(sum2 / static_cast<double>(count)) : 0.0;
+  if (dist) sum2 = dist->sum(sum2);
+  return global_count ? std::sqrt(sum2 / static_cast<double>(global_count)) : 0.0;
 }
 
 template <int D>
@@ -121,8 +162,10 @@ template <int D>
 void GradientRows<D>::build(StepContext<D>& sys, GradientForm form, WallPressures walls) {
   const ParticleSet<D>& P = sys.particles;
   const NeighbourList<D>& list = sys.neighbours;
-  const std::size_t n = P.n_moving;
-  const std::size_t entries = list.start[n] + n;
+  // Rows of the owned particles (a distributed run's ghosts take their owners' results), laid
+  // out over every moving particle's list.
+  const std::size_t n = P.ownedMoving();
+  const std::size_t entries = list.start[P.n_moving] + P.n_moving;
   index.resize(entries);
   coef.resize(entries);
   const CandidatePairs<D> pairs(P, sys.kernel, sys.domain, list);
@@ -167,7 +210,7 @@ void GradientRows<D>::build(StepContext<D>& sys, GradientForm form, WallPressure
           const std::size_t j = g.j;
           index[g.entry] = static_cast<Index>(j);
           if (form == GradientForm::symmetric) {  // thesis eq. (3.18)
-            coef[g.entry] = walls_enter || j < n ? Vec<D>((m[j] / (rho[j] * rho[j]) * g.F) * g.rkj) : Vec<D>::Zero();
+            coef[g.entry] = walls_enter || j < P.n_moving ? Vec<D>((m[j] / (rho[j] * rho[j]) * g.F) * g.rkj) : Vec<D>::Zero();
             self += (m[j] / (rhok * rhok) * g.F) * g.rkj;
           } else {  // thesis eq. (3.17), renormalised or not
             coef[g.entry] = (m[j] / rho[j] * g.F / rhok) * (Minv * g.rkj);
@@ -188,7 +231,7 @@ void PressureSystem<D>::assemble(StepContext<D>& sys, double dt, LaplacianForm f
                                  const double* known) {
   const ParticleSet<D>& P = sys.particles;
   const NeighbourList<D>& list = sys.neighbours;
-  const std::size_t n = P.n_moving, rows = unknowns.count;
+  const std::size_t n = P.n_moving, rows = unknowns.count, columns = unknowns.columns;
   rhs_.resize(static_cast<Eigen::Index>(rows));
   const int threads = rows >= kParallelMinimum ? omp_get_max_threads() : 1;
   if (rows_.size() < static_cast<std::size_t>(threads)) rows_.resize(static_cast<std::size_t>(threads));
@@ -219,7 +262,7 @@ void PressureSystem<D>::assemble(StepContext<D>& sys, double dt, LaplacianForm f
       const std::size_t t = static_cast<std::size_t>(omp_get_thread_num());
       const std::size_t nt = static_cast<std::size_t>(omp_get_num_threads());
       RowBuffer& rb = rows_[t];
-      if (rb.slot.size() < rows) rb.slot.assign(rows, -1);
+      if (rb.slot.size() < columns) rb.slot.assign(columns, -1);
       rb.cols.clear();
       rb.vals.clear();
       rb.lengths.clear();
@@ -340,7 +383,7 @@ void PressureSystem<D>::assemble(StepContext<D>& sys, double dt, LaplacianForm f
   std::size_t nnz = 0;
   for (int t = 0; t < threads; ++t) nnz += rows_[static_cast<std::size_t>(t)].cols.size();
   SparseRowMatrix& matrix = out.matrix;
-  matrix.resize(static_cast<Eigen::Index>(rows), static_cast<Eigen::Index>(rows));
+  matrix.resize(static_cast<Eigen::Index>(rows), static_cast<Eigen::Index>(columns));
   matrix.resizeNonZeros(static_cast<Eigen::Index>(nnz));
   int* outer = matrix.outerIndexPtr();
   int* inner = matrix.innerIndexPtr();
@@ -379,7 +422,7 @@ void correctVelocities(StepContext<D>& sys, const ProjectionOperators<D>& ops, d
                        const double* p_old) {
   ParticleSet<D>& P = sys.particles;
   const NeighbourList<D>& list = sys.neighbours;
-  const std::size_t n = P.n_moving;
+  const std::size_t n = P.ownedMoving();  // the state's particles
   double* yv = y + n * (D + 1);
   std::vector<double>& correction = ops.correction;
 #pragma omp parallel for schedule(static) if (n >= kParallelMinimum)
@@ -394,6 +437,8 @@ void correctVelocities(StepContext<D>& sys, const ProjectionOperators<D>& ops, d
 }
 
 #define VESPH_INSTANTIATE_PRESSURE_SYSTEM(D)                                                                  \
+  template void PressureUnknowns::number<D>(const ParticleSet<D>&, const double*, ParticleDistribution<D>*);    \
+  template double PressureUnknowns::rms<D>(const std::vector<double>&, ParticleDistribution<D>*) const;         \
   template void continuityDivergence<D>(StepContext<D>&, const WallFlux<D>&, std::vector<double>&);             \
   template struct GradientRows<D>;                                                                             \
   template class PressureSystem<D>;                                                                            \

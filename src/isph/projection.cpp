@@ -134,11 +134,45 @@ void Projection<D>::flagFreeSurface(StepContext<D>& sys, double t) {
   if (!free_surface_.effect) return;
   if (!free_surface_.flag) free_surface_.flag = sys.particles.fields.find("free_surface");
   sys.runEffect(free_surface_.effect, t);
+  // The ghosts' flags, normals and number densities from their owners (the surface values and
+  // the unknowns' numbering read them).
+  if (this->distribution()) this->distribution()->refreshFields(sys.particles);
+}
+
+template <int D>
+void Projection<D>::refreshVelocities(StepContext<D>& sys) {
+  if (!this->distribution()) return;
+  const HaloArray v{sys.particles.velocity.data(), D, Field::Range::all};
+  this->distribution()->refreshArrays(std::span<const HaloArray>(&v, 1));
+}
+
+template <int D>
+SolveReport Projection<D>::solvePressure(Eigen::VectorXd& x) {
+  if (unknowns_->global_count == 0) return SolveReport{true, 0, 0.0, {}};
+  if (this->distribution())
+    return solver_->solveAcross(pressure_matrix_->matrix, pressure_matrix_->pattern_changed, unknowns_->across,
+                                system_->rhs(), x);
+  return solver_->solve(pressure_matrix_->matrix, pressure_matrix_->pattern_changed, system_->rhs(), x);
+}
+
+template <int D>
+void Projection<D>::distributing(ParticleSet<D>&) {
+  // What the projection does not yet do across processes (issue 36), refused before the run.
+  std::string missing;
+  if (!solver_->solvesAcrossProcesses())
+    missing = "solver.linear_solver = \"" + options_.type + "\" with preconditioner = \"" + options_.preconditioner +
+              "\" (across processes the pressure is solved by hypre: linear_solver = \"bicgstab\", \"cg\" or "
+              "\"gmres\" with preconditioner = \"amg\", the default)";
+  else if (cleaning_)
+    missing = "solver.divergence_cleaning (its exact operator reaches two supports through the gradient rows)";
+  if (!missing.empty())
+    throw InputError("a run across processes does not support yet (issue 36): " + missing + ". Run it as one process.");
+  walls_->setDistribution(this->distribution());
 }
 
 template <int D>
 void Projection<D>::numberUnknowns(const StepContext<D>& sys) {
-  unknowns_->number(sys.particles.n_moving, free_surface_.flag ? free_surface_.flag->data.data() : nullptr);
+  unknowns_->number(sys.particles, free_surface_.flag ? free_surface_.flag->data.data() : nullptr, this->distribution());
 }
 
 template <int D>
@@ -204,7 +238,7 @@ void Projection<D>::surfacePressures(StepContext<D>& sys, double t) {
 template <int D>
 void Projection<D>::correctPositions(StepContext<D>& sys, double dt, double* y) {
   ParticleSet<D>& P = sys.particles;
-  const std::size_t n = P.n_moving;
+  const std::size_t n = P.ownedMoving();  // the state's particles
   const double half_dt2 = 0.5 * dt * dt;
   // y starts with the positions (SphSystem::pack)
   for (std::size_t k = 0; k < n * D; ++k) {
@@ -217,10 +251,17 @@ template <int D>
 void Projection<D>::storePressure(const StepContext<D>& sys) {
   // Fluid: the solution on the unknowns, 0 on the free surface (and the pinned particle);
   // walls: the extrapolation p_w = sum_f c_wf p_f + b_w (src/isph/wall_conditions.cpp).
+  // Across processes the ghost fluid particles take their owners' values before the walls
+  // extrapolate (every wall particle here within a support of an owned one has its whole
+  // neighbourhood in the halo, two supports deep: haloSupports).
   const std::size_t n = sys.particles.n_moving, N = sys.particles.size();
   double* p = pressure_->data.data();
   for (std::size_t i = 0; i < n; ++i) p[i] = surface_pressure_.empty() ? 0.0 : surface_pressure_[i];
   for (std::size_t r = 0; r < unknowns_->count; ++r) p[unknowns_->particle_of[r]] = solution_[static_cast<Eigen::Index>(r)];
+  if (this->distribution()) {
+    const HaloArray pressures{p, 1, Field::Range::all};
+    this->distribution()->refreshArrays(std::span<const HaloArray>(&pressures, 1));
+  }
   const NeighbourList<D>& list = sys.neighbours;
   const std::vector<double>& weight = walls_->weights();
   const std::vector<double>& offset = walls_->offsets();
@@ -238,13 +279,14 @@ void Projection<D>::start(StepContext<D>& sys, double t, double* y) {
   if (carried_ == CarriedPressure::none) return;
   const auto t0 = Clock::now();
   ParticleSet<D>& P = sys.particles;
-  const std::size_t n = P.n_moving;
+  const std::size_t n = P.ownedMoving();  // the state's particles
   // The pressure-free acceleration of the initial state (the pressure field is zero).
   std::vector<double> rate(sys.size());
   sys.evaluate(t, y, rate.data());
   const double* dvdt = rate.data() + n * (D + 1);
   // The projection of that acceleration, as a velocity over dt = 1, without the correction.
   for (std::size_t k = 0; k < n * D; ++k) P.velocity[k] = dvdt[k];
+  refreshVelocities(sys);
   flagFreeSurface(sys, t);
   numberUnknowns(sys);
   // As in the plain form (there is no previous pressure whose wall offsets would cancel the
@@ -257,13 +299,20 @@ void Projection<D>::start(StepContext<D>& sys, double t, double* y) {
                     *pressure_matrix_);
   solution_.setZero(static_cast<Eigen::Index>(unknowns_->count));
   const auto t1 = Clock::now();
-  const SolveReport rep = unknowns_->count ? solver_->solve(pressure_matrix_->matrix, pressure_matrix_->pattern_changed,
-                                                            system_->rhs(), solution_)
-                                           : SolveReport{true, 0, 0.0, {}};
-  if (!rep.ok) throw NumericalFailure("ISPH initial pressure solve failed: " + rep.message);
-  initial_ = InitialSolve{unknowns_->count, rep.iterations, rep.residual, seconds(t0, t1), seconds(t1, Clock::now())};
+  const SolveReport rep = solvePressure(solution_);
+  if (!rep.ok) fail("ISPH initial pressure solve failed: " + rep.message);
+  initial_ = InitialSolve{static_cast<std::size_t>(unknowns_->global_count), rep.iterations, rep.residual, seconds(t0, t1),
+                          seconds(t1, Clock::now())};
   storePressure(sys);
   sys.unpack(y);  // the velocities back
+  sys.refreshGhosts();
+}
+
+template <int D>
+void Projection<D>::fail(const std::string& message) const {
+  // Across processes every process meets the same failed solve (its report is agreed on).
+  if (this->distribution()) throw SharedNumericalFailure(message);
+  throw NumericalFailure(message);
 }
 
 template <int D>
@@ -272,7 +321,7 @@ void Projection<D>::predictorStep(StepContext<D>& sys, double dt) {
   // (v** = v* + dt G p^n) and solve for the whole pressure.
   const double* pn = pressure_->data.data();
   double* v = sys.particles.velocity.data();
-  const std::size_t n = sys.particles.n_moving;
+  const std::size_t n = sys.particles.ownedMoving();
   const isph::GradientRows<D>& rows = *gradient_rows_;
   const NeighbourList<D>& list = sys.neighbours;
 #pragma omp parallel for schedule(static) if (n >= kParallelMinimum)
@@ -280,6 +329,7 @@ void Projection<D>::predictorStep(StepContext<D>& sys, double dt) {
     const Vec<D> a = rows.at(list, k, pn);
     for (int c = 0; c < D; ++c) v[D * k + c] += dt * a[c];
   }
+  refreshVelocities(sys);
 }
 
 template <int D>
@@ -305,6 +355,7 @@ void Projection<D>::apply(StepContext<D>& sys, double t, double dt, double* y) {
   ParticleSet<D>& P = sys.particles;
   const std::size_t N = P.size();
   sys.unpack(y);
+  sys.refreshGhosts();
   if (sys.neighbours.update(P)) sys.driver.prepare(sys.neighbours);
   flagFreeSurface(sys, t);
   numberUnknowns(sys);
@@ -312,7 +363,7 @@ void Projection<D>::apply(StepContext<D>& sys, double t, double dt, double* y) {
   // The divergence of v* with the walls at rest (reported, and the source of the incremental
   // form; the wall conditions below compute the other forms' source).
   isph::continuityDivergence(sys, isph::WallFlux<D>{}, divergence_);
-  last_.divergence_before = unknowns_->rms(divergence_);
+  last_.divergence_before = unknowns_->rms(divergence_, this->distribution());
   if (carried_ == CarriedPressure::predictor) predictorStep(sys, dt);
   const bool increment = carried_ == CarriedPressure::increment;
   walls_->prepare(sys, dt, increment ? isph::SolvedFor::increment : isph::SolvedFor::pressure, walls_->inlet(),
@@ -326,21 +377,23 @@ void Projection<D>::apply(StepContext<D>& sys, double t, double dt, double* y) {
   // sources sum to zero; the discrete sources do not quite, and the pin would take the
   // remainder as a point source at one particle. Removing the mean spreads it evenly.
   Eigen::VectorXd& rhs = system_->rhs();
-  if (unknowns_->pinned && unknowns_->count > 0) rhs.array() -= rhs.mean();
+  if (unknowns_->pinned && unknowns_->global_count > 0) {
+    double sum = rhs.sum();
+    if (this->distribution()) sum = this->distribution()->sum(sum);
+    rhs.array() -= sum / static_cast<double>(unknowns_->global_count);
+  }
   const auto t1 = Clock::now();
 
   // Warm start (iterative solver): the previous pressure.
   double* p = pressure_->data.data();
   solution_.resize(static_cast<Eigen::Index>(unknowns_->count));
   for (std::size_t r = 0; r < unknowns_->count; ++r) solution_[static_cast<Eigen::Index>(r)] = p[unknowns_->particle_of[r]];
-  last_.solve = unknowns_->count
-                    ? solver_->solve(pressure_matrix_->matrix, pressure_matrix_->pattern_changed, rhs, solution_)
-                    : SolveReport{true, 0, 0.0, {}};
+  last_.solve = solvePressure(solution_);
   const auto t2 = Clock::now();
   if (!last_.solve.ok) {
     std::ostringstream os;
-    os << "ISPH pressure solve failed at t = " << t << " s (" << unknowns_->count << " unknowns): " << last_.solve.message;
-    throw NumericalFailure(os.str());
+    os << "ISPH pressure solve failed at t = " << t << " s (" << unknowns_->global_count << " unknowns): " << last_.solve.message;
+    fail(os.str());
   }
 
   // The carried forms correct with the change of the pressure, p^{n+1} - p^n.
@@ -350,16 +403,17 @@ void Projection<D>::apply(StepContext<D>& sys, double t, double dt, double* y) {
   const isph::ProjectionOperators<D> ops{*unknowns_, *gradient_rows_, *system_, *walls_, divergence_, correction_};
   correction_.assign(P.n_moving * D, 0.0);
   isph::correctVelocities(sys, ops, dt, y, p, carried ? previous_pressure_.data() : nullptr);
+  refreshVelocities(sys);
   // The corrected velocities' divergence at the positions of the solve: what the projection
   // acts on (the position correction that follows moves the operator by O(dt^2)).
   isph::continuityDivergence(sys, isph::WallFlux<D>{}, divergence_);
-  last_.divergence_after = last_.divergence_projected = unknowns_->rms(divergence_);
+  last_.divergence_after = last_.divergence_projected = unknowns_->rms(divergence_, this->distribution());
   const auto t3 = Clock::now();
   if (cleaning_) cleaning_->apply(sys, ops, t, dt, y);
   const auto t4 = Clock::now();
   if (cleaning_) {
     isph::continuityDivergence(sys, isph::WallFlux<D>{}, divergence_);
-    last_.divergence_after = unknowns_->rms(divergence_);
+    last_.divergence_after = unknowns_->rms(divergence_, this->distribution());
   }
   correctPositions(sys, dt, y);
   const auto t5 = Clock::now();
@@ -387,7 +441,7 @@ const SolveReport& Projection<D>::lastCleaning() const {
 
 template <int D>
 std::size_t Projection<D>::unknowns() const {
-  return unknowns_ ? unknowns_->count : 0;
+  return unknowns_ ? static_cast<std::size_t>(unknowns_->global_count) : 0;
 }
 
 template <int D>
@@ -410,12 +464,16 @@ void Projection<D>::diagnostics(std::vector<double>& v) const {
 template <int D>
 void Projection<D>::saveCarried(NamedArrays& out) const {
   out.emplace_back("pressure", pressure_->data);
-  out.emplace_back("totals", std::vector<double>{
+  std::vector<double> totals{
       static_cast<double>(solves_), static_cast<double>(iterations_total_), static_cast<double>(iterations_max_),
       residual_max_, assembly_seconds_, solve_seconds_, correction_seconds_, divergence_ratio_max_,
       static_cast<double>(pressure_matrix_->pattern_builds),
       static_cast<double>(cleaning_ ? cleaning_->iterations_total : 0), static_cast<double>(cleaning_ ? cleaning_->iterations_max : 0),
-      cleaning_ ? cleaning_->residual_max : 0.0, cleaning_ ? cleaning_->seconds : 0.0});
+      cleaning_ ? cleaning_->residual_max : 0.0, cleaning_ ? cleaning_->seconds : 0.0};
+  // Across processes the totals are the same on every process (the checkpoint holds one copy):
+  // the solver's are already; the times and pattern builds are each process's, their maximum.
+  if (this->distribution()) this->distribution()->max(totals);
+  out.emplace_back("totals", std::move(totals));
 }
 
 template <int D>
@@ -445,6 +503,12 @@ void Projection<D>::restoreCarried(const ArrayLookup& find) {
 
 template <int D>
 void Projection<D>::summarize(nlohmann::json& s) const {
+  // Across processes: the slowest process's times and the most pattern builds (collective).
+  double per_process[4] = {assembly_seconds_, solve_seconds_, correction_seconds_,
+                           static_cast<double>(pressure_matrix_->pattern_builds)};
+  if (this->distribution()) this->distribution()->max(per_process);
+  const double assembly_seconds = per_process[0], solve_seconds = per_process[1], correction_seconds = per_process[2];
+  const auto pattern_builds = static_cast<std::uint64_t>(per_process[3]);
   nlohmann::json j;
   j["linear_solver"] = solver_->name();
   j["solves"] = solves_;
@@ -452,11 +516,11 @@ void Projection<D>::summarize(nlohmann::json& s) const {
   j["iterations_max"] = iterations_max_;
   j["iterations_mean"] = solves_ ? static_cast<double>(iterations_total_) / static_cast<double>(solves_) : 0.0;
   j["max_relative_residual"] = residual_max_;
-  j["assembly_seconds"] = assembly_seconds_;
-  j["solve_seconds"] = solve_seconds_;
-  j["correction_seconds"] = correction_seconds_;
-  j["seconds_per_solve"] = solves_ ? solve_seconds_ / static_cast<double>(solves_) : 0.0;
-  j["pattern_builds"] = pressure_matrix_->pattern_builds;
+  j["assembly_seconds"] = assembly_seconds;
+  j["solve_seconds"] = solve_seconds;
+  j["correction_seconds"] = correction_seconds;
+  j["seconds_per_solve"] = solves_ ? solve_seconds / static_cast<double>(solves_) : 0.0;
+  j["pattern_builds"] = pattern_builds;
   j["max_divergence_ratio"] = divergence_ratio_max_;
   j["pressure_pinned"] = unknowns_->pinned;
   j["divergence_cleaning"] = cleaning_ != nullptr;

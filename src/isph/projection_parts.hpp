@@ -28,18 +28,29 @@ enum class WallPressures { enter, excluded };
 // pressure), or the increment over the carried pressure (the incremental form's steps).
 enum class SolvedFor { pressure, increment };
 
-// Unknowns: the fluid particles off the free surface (unknown_of[i] = row or -1).
+// Unknowns: the fluid particles off the free surface (unknown_of[i] = column or -1). In a run
+// across processes the rows are this process's owned fluid particles, [0, count), and the
+// columns go on with its ghosts' unknowns, [count, columns): `across` numbers them globally (the
+// owners' numbers, refreshed into the ghosts); serially columns = count.
 struct PressureUnknowns {
   std::vector<int> unknown_of, particle_of;
-  std::size_t count = 0;
-  // No Dirichlet particle this step (closed or periodic domain): p = 0 at the first fluid
-  // particle fixes the pure Neumann problem's constant.
+  std::size_t count = 0, columns = 0;
+  std::uint64_t global_count = 0;  // every process's rows
+  // No Dirichlet particle this step (closed or periodic domain): p = 0 at the fluid particle
+  // with the smallest id fixes the pure Neumann problem's constant.
   bool pinned = false;
+  DistributedRows across;  // with a distribution only
 
-  // surface_flag: 1 on the free surface (nullptr: no detection).
-  void number(std::size_t n_moving, const double* surface_flag);
-  // Root-mean-square over the unknowns of a per-moving-particle value.
-  double rms(const std::vector<double>& per_particle) const;
+  // surface_flag: 1 on the free surface (nullptr: no detection); distribution: null serially.
+  // Collective with a distribution.
+  template <int D>
+  void number(const ParticleSet<D>& particles, const double* surface_flag, ParticleDistribution<D>* distribution);
+  // Root-mean-square over every process's unknowns of a per-moving-particle value.
+  template <int D>
+  double rms(const std::vector<double>& per_particle, ParticleDistribution<D>* distribution) const;
+
+ private:
+  std::vector<double> global_number_;  // per moving particle, for the halo refresh
 };
 
 // How the wall neighbours' velocities enter the continuity divergence.
@@ -103,6 +114,8 @@ class WallConditions {
       : condition_(condition), inlet_(inlet), rho0_(rest_density), g_(body_acceleration) {}
 
   WallCondition condition() const { return condition_; }
+  // A run across processes: the ghosts' wall normals and gaps come from their owners.
+  void setDistribution(ParticleDistribution<D>* distribution) { distribution_ = distribution; }
   const VelocityInlet<D>* inlet() const { return inlet_ ? &*inlet_ : nullptr; }
 
   // The wall data for a solve over dt of the velocity in P.velocity, and the source
@@ -128,6 +141,7 @@ class WallConditions {
   std::vector<double> weight_, offset_;
   std::vector<Vec<D>> normal_;  // per moving particle: unit normal away from the walls (0: none near)
   std::vector<double> gap_;     // per moving particle: the approach left before the rest distance, m
+  ParticleDistribution<D>* distribution_ = nullptr;
 };
 
 // One assembled matrix with the record of its sparsity pattern (the direct solvers keep their

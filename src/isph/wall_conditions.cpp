@@ -84,6 +84,12 @@ void WallConditions<D>::computeNormals(StepContext<D>& sys) {
                              const double spacing = std::pow(m[i] / rho[i], 1.0 / D);
                              gap_[i] = std::max(0.0, nearest - spacing);
                            });
+  // The walls' extrapolation reads them at the ghosts too (their fluid neighbours).
+  if (distribution_) {
+    static_assert(sizeof(Vec<D>) == D * sizeof(double), "normals are packed as D doubles each");
+    const HaloArray arrays[2] = {{normal_.data()->data(), D, Field::Range::moving}, {gap_.data(), 1, Field::Range::moving}};
+    distribution_->refreshArrays(arrays);
+  }
 }
 
 template <int D>

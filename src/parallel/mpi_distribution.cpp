@@ -22,9 +22,10 @@ constexpr double kFixedParticleWeight = 0.25;
 template <int D>
 class MpiDistribution final : public ParticleDistribution<D> {
  public:
-  MpiDistribution(const Domain<D>& domain, double cutoff, double skin, double tolerance)
+  MpiDistribution(const Domain<D>& domain, double cutoff, double skin, double tolerance, int halo_supports)
       : comm_(Communicator::world()), domain_(domain), partition_(comm_, domain), exchange_(comm_, domain),
-        dealer_(comm_, domain), radius_(cutoff + skin), skin_(skin), tolerance_(tolerance) {
+        dealer_(comm_, domain), radius_(halo_supports * cutoff + skin), skin_(skin), tolerance_(tolerance) {
+    if (halo_supports < 1) throw std::invalid_argument("a halo is at least one kernel support deep");
     if (!(skin > 0))
       throw std::invalid_argument("a distributed run needs a neighbour skin > 0 (neighbours.skin): the halo holds "
                                   "until the particles have moved half of it");
@@ -70,6 +71,8 @@ class MpiDistribution final : public ParticleDistribution<D> {
       if (f->refreshed_in_halo) arrays_.push_back({f->data.data(), f->components, f->range});
     exchange_.refresh(arrays_);
   }
+
+  void refreshArrays(std::span<const HaloArray> arrays) override { exchange_.refresh(arrays); }
 
   RedistributionNeed needsRedistribution(const ParticleSet<D>& p, double step_motion, bool changes_here) override {
     double moved = largestDisplacement(domain_, p.position.data(), reference_.data(), p.ownedMoving());
@@ -245,11 +248,11 @@ class MpiDistribution final : public ParticleDistribution<D> {
 
 template <int D>
 std::unique_ptr<ParticleDistribution<D>> makeMpiDistribution(const Domain<D>& domain, double cutoff, double skin,
-                                                             double imbalance_tolerance) {
-  return std::make_unique<MpiDistribution<D>>(domain, cutoff, skin, imbalance_tolerance);
+                                                             double imbalance_tolerance, int halo_supports) {
+  return std::make_unique<MpiDistribution<D>>(domain, cutoff, skin, imbalance_tolerance, halo_supports);
 }
 
-template std::unique_ptr<ParticleDistribution<2>> makeMpiDistribution<2>(const Domain<2>&, double, double, double);
-template std::unique_ptr<ParticleDistribution<3>> makeMpiDistribution<3>(const Domain<3>&, double, double, double);
+template std::unique_ptr<ParticleDistribution<2>> makeMpiDistribution<2>(const Domain<2>&, double, double, double, int);
+template std::unique_ptr<ParticleDistribution<3>> makeMpiDistribution<3>(const Domain<3>&, double, double, double, int);
 
 }  // namespace vesph

@@ -11,8 +11,18 @@
 namespace vesph {
 
 template <int D>
-void Checkpoints<D>::join(std::string prefix, RestoreStage stage, Save save, Restore restore) {
-  carriers_.push_back(Carrier{std::move(prefix), stage, std::move(save), std::move(restore)});
+void Checkpoints<D>::join(std::string prefix, RestoreStage stage, Save save, Restore restore,
+                          std::vector<std::string> per_particle) {
+  Carrier c{std::move(prefix), stage, std::move(save), std::move(restore), {}};
+  for (const std::string& name : per_particle) c.per_particle.push_back(arrayName(c, name));
+  carriers_.push_back(std::move(c));
+}
+
+template <int D>
+bool Checkpoints<D>::particleLaidOut(const std::string& name) const {
+  for (const Carrier& c : carriers_)
+    if (std::find(c.per_particle.begin(), c.per_particle.end(), name) != c.per_particle.end()) return true;
+  return false;
 }
 
 template <int D>
@@ -35,7 +45,7 @@ void Checkpoints<D>::joinScene() {
     StepHook<D>* hook = h.get();
     join(std::string(hook->name()), RestoreStage::hooks_started,
          [hook](double, NamedArrays& out) { hook->saveCarried(out); },
-         [hook](const ArrayLookup& find) { hook->restoreCarried(find); });
+         [hook](const ArrayLookup& find) { hook->restoreCarried(find); }, hook->carriedPerParticle());
   }
 }
 
@@ -92,6 +102,17 @@ void Checkpoints<D>::attachRows(ParticleSet<D>& owned, const Checkpoint& local) 
   attach("state", local.state);
   for (const auto& [aname, values] : local.arrays)
     if (stateLaidOut(aname)) attach(aname, values);
+  // Per-particle arrays: the owned particles' values (owned moving, then owned fixed: the order
+  // of `owned`).
+  const ParticleSet<D>& p = system_.particles;
+  for (const auto& [aname, values] : local.arrays) {
+    if (!particleLaidOut(aname)) continue;
+    if (values.size() != p.size()) throw std::logic_error("checkpoint array " + aname + " is not one value per particle");
+    Field& rows = owned.fields.require(kRowsPrefix + aname, 1, Field::Range::all);
+    rows.data.assign(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(p.ownedMoving()));
+    rows.data.insert(rows.data.end(), values.begin() + static_cast<std::ptrdiff_t>(p.n_moving),
+                     values.begin() + static_cast<std::ptrdiff_t>(p.ownedEnd()));
+  }
 }
 
 template <int D>
@@ -100,6 +121,8 @@ CheckpointRows Checkpoints<D>::shareLayout(const OutputShare<D>& share) const {
                       system_.segmentWidths(), {kStateLaidOut}, {}};
   if (system_.changesParticleSet())
     rows.particle_arrays = {{"particles.position", D}, {"particles.velocity", D}, {"particles.mass", 1}};
+  for (const Carrier& c : carriers_)
+    for (const std::string& name : c.per_particle) rows.particle_arrays.emplace_back(name, 1);
   return rows;
 }
 
@@ -131,6 +154,7 @@ Checkpoint Checkpoints<D>::shareCheckpoint(const OutputShare<D>& dealt, const Ch
   for (const auto& a : local.arrays) {
     const std::string& name = a.first;
     if (stateLaidOut(name)) c.arrays.emplace_back(name, detach(name));
+    else if (particleLaidOut(name)) c.arrays.emplace_back(name, share.fields.find(kRowsPrefix + name)->data);
     else if (name == "particles.position") c.arrays.emplace_back(name, share.position);
     else if (name == "particles.velocity") c.arrays.emplace_back(name, share.velocity);
     else if (name == "particles.mass") c.arrays.emplace_back(name, share.mass);
@@ -255,6 +279,23 @@ void Checkpoints<D>::validatePositions(const Checkpoint& ck, const ResumeRules& 
 }
 
 template <int D>
+std::vector<double> Checkpoints<D>::byId(const Checkpoint& ck, const std::vector<double>& values) const {
+  std::unordered_map<std::uint64_t, std::size_t> row_of;
+  row_of.reserve(ck.id.size());
+  for (std::size_t j = 0; j < ck.id.size(); ++j) row_of.emplace(ck.id[j], j);
+  const ParticleSet<D>& p = system_.particles;
+  std::vector<double> part(p.size());
+  bool found = values.size() == ck.id.size();
+  for (std::size_t i = 0; i < p.size() && found; ++i) {
+    const auto it = row_of.find(p.id[i]);
+    found = it != row_of.end();
+    if (found) part[i] = values[it->second];
+  }
+  if (system_.distribution->sum(static_cast<std::uint64_t>(found ? 0 : 1)) != 0) throw anotherParticleSet();
+  return part;
+}
+
+template <int D>
 std::vector<double> Checkpoints<D>::ownedPart(const Checkpoint& ck, const std::vector<double>& values) const {
   const std::vector<std::size_t> widths = system_.segmentWidths();
   std::size_t width = 0;
@@ -305,10 +346,12 @@ void Checkpoints<D>::resumeDistributed(Checkpoint& ck) {
   state_.resize(system_.size());
   system_.pack(state_.data());
   for (auto& [aname, values] : ck.arrays) {
-    if (!stateLaidOut(aname))
-      throw InputError("--resume: the checkpoint in " + where_ + " carries '" + aname +
-                       "', which a run across processes does not restore; resume it as one process");
-    values = ownedPart(ck, values);
+    if (particleLaidOut(aname)) {
+      values = byId(ck, values);
+      continue;
+    }
+    // The rest is the same on every process (the ISPH solver's totals): as written.
+    if (stateLaidOut(aname)) values = ownedPart(ck, values);
   }
   ck.state.clear();
 }
@@ -358,8 +401,10 @@ Checkpoint Checkpoints<D>::resume(const std::string& dir, const ResumeRules& rul
     system_.distribute();  // the restored set shared out again
     state_.resize(system_.size());
     system_.pack(state_.data());
-    for (auto& [aname, values] : ck.arrays)
+    for (auto& [aname, values] : ck.arrays) {
       if (stateLaidOut(aname)) values = ownedPart(ck, values);
+      else if (particleLaidOut(aname)) values = byId(ck, values);
+    }
     ck.state.clear();
     return std::move(src.checkpoint);
   }

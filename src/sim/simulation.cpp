@@ -149,8 +149,10 @@ void Simulation<D>::distribute() {
     throw InputError(what + ". Run it as one process.");
   }
 #if VESPH_HAVE_MPI_RUNS
-  system_.distribution =
-      makeMpiDistribution<D>(system_.domain, system_.kernel.supportRadius(), skin_ * system_.kernel.supportRadius(), 1.1);
+  int halo_supports = 1;
+  for (const auto& hk : system_.hooks) halo_supports = std::max(halo_supports, hk->haloSupports());
+  system_.distribution = makeMpiDistribution<D>(system_.domain, system_.kernel.supportRadius(),
+                                                skin_ * system_.kernel.supportRadius(), 1.1, halo_supports);
   system_.distribute();
   const ParticleSet<D>& p = system_.particles;
   whole_scene_.processes = system_.distribution->size();

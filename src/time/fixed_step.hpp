@@ -49,7 +49,9 @@ class FixedStepIntegrator : public Integrator {
       ++stats_.steps;
       if (!sys_->afterStep(t_, dt, y_)) return false;
       if (sys_->resizePending()) {  // particles released or removed: a new state, F again
-        const bool keeps_rates = sys_->resizeKeepsRates();  // only moved between processes
+        // Particles only moved between processes: the rate moves with them, unless a hook
+        // changed the state (the ISPH projection), whose rate is evaluated anew as below.
+        const bool keeps_rates = sys_->resizeKeepsRates() && !sys_->afterStepChangesState();
         if (keeps_rates) sys_->stashRates(rate_.data());
         y_ = sys_->resizeState(t_, y_);
         n_ = sys_->size();

@@ -37,6 +37,14 @@ struct OutputShare {
   std::uint64_t fixed_offset = 0, fixed_total = 0;    // of its fixed ones, counted after the moving
 };
 
+// One per-particle array a halo refresh copies to the ghosts: `components` doubles per particle,
+// laid out over `range` (all: every particle; moving: [0, n_moving); fixed: [n_moving, size())).
+struct HaloArray {
+  double* data;
+  int components;
+  Field::Range range;
+};
+
 // What the step just accepted asks of every process (ParticleDistribution::needsRedistribution).
 struct RedistributionNeed {
   bool redistribute = false;     // the halo must be built again before the next step
@@ -62,6 +70,9 @@ class ParticleDistribution {
   // The owners' velocities, densities and every field into the ghosts (after a phase that wrote
   // per-particle values a later phase reads from neighbours). Collective.
   virtual void refreshFields(ParticleSet<D>& p) = 0;
+  // The owners' values of the given arrays into the ghosts (a step hook's own per-particle
+  // values: the ISPH projection's unknown numbers, pressures, corrected velocities). Collective.
+  virtual void refreshArrays(std::span<const HaloArray> arrays) = 0;
   // Whether some owned particle (fluid, or a moving fixed one: an inflow buffer's) moved so far
   // since the halo was built that the halo may miss a neighbour before the next step ends, a
   // step moving a particle by up to step_motion (m), or some process has particle changes of

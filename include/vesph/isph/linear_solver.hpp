@@ -14,6 +14,7 @@
 // preconditioner keeps its hierarchy while the pattern is unchanged, for at most
 // amg_setup_interval solves (its coarse levels then lag the matrix's values).
 #include <Eigen/Sparse>
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -47,6 +48,16 @@ struct SolveReport {
   std::string message;      // why it failed
 };
 
+// A pressure system spread over the processes of a distributed run: this process holds the
+// rows [first_row, first_row + A.rows()) of a system of global_rows unknowns, and A's columns
+// are local: column c is the global unknown column_global[c] (the process's own rows first, so
+// column_global[c] = first_row + c for c < A.rows(); then the unknowns of its ghosts).
+struct DistributedRows {
+  const void* communicator = nullptr;  // points to the run's MPI_Comm
+  std::int64_t first_row = 0, global_rows = 0;
+  std::vector<std::int64_t> column_global;
+};
+
 class LinearSolver {
  public:
   virtual ~LinearSolver() = default;
@@ -59,6 +70,12 @@ class LinearSolver {
   // and hypre), so that the first solve's time is the solve's; a run calls it when it is about
   // to solve (never `vesph check`).
   virtual void prepare() {}
+  // Whether solveAcross works (the hypre solvers: preconditioner = "amg").
+  virtual bool solvesAcrossProcesses() const { return false; }
+  // The distributed solve: every process calls it together with its rows (A: its rows, local
+  // columns; b, x: its rows). The report is the whole system's, the same on every process.
+  virtual SolveReport solveAcross(const SparseRowMatrix& A, bool pattern_changed, const DistributedRows& rows,
+                                  const Eigen::VectorXd& b, Eigen::VectorXd& x);
 };
 
 std::unique_ptr<LinearSolver> makeLinearSolver(const LinearSolverOptions& options);

@@ -140,10 +140,19 @@ class Projection final : public StepHook<D> {
   // first guess) and the run's solver totals; on resume they replace what start() computed.
   void saveCarried(NamedArrays& out) const override;
   void restoreCarried(const ArrayLookup& find) override;
+  std::vector<std::string> carriedPerParticle() const override { return {"pressure"}; }
   std::vector<std::string> diagnosticsColumns() const override;
   void diagnostics(std::vector<double>& values) const override;
   void summarize(nlohmann::json& summary) const override;
   std::string describe() const override;
+  // Runs across processes (docs/architecture.md "Distributed runs"): the rows of the owned
+  // fluid particles, the ghosts' unknowns as further columns, one hypre solve over every
+  // process; the halo two supports deep, for the walls' pressures eliminated into the rows.
+  // distributing refuses what is not distributed yet (the direct and Eigen solvers, the
+  // divergence cleaning).
+  bool distributable() const override { return true; }
+  void distributing(ParticleSet<D>& whole) override;
+  int haloSupports() const override { return 2; }
 
   // Root-mean-square of the discrete divergence (1/s) over the pressure unknowns, before and
   // after the last projection (the "after" value at the corrected positions).
@@ -169,8 +178,14 @@ class Projection final : public StepHook<D> {
   };
   void flagFreeSurface(StepContext<D>& sys, double t);
   void numberUnknowns(const StepContext<D>& sys);
-  // Solves the pressure equation over dt for the velocity in P.velocity (start and apply).
-  SolveReport solvePressure(StepContext<D>& sys, double dt, const double* carried);
+  // The assembled pressure equation solved into x (x: the first guess), serially or by every
+  // process together over its rows.
+  SolveReport solvePressure(Eigen::VectorXd& x);
+  // The ghosts' velocities from their owners (after the owners' were changed; runs across
+  // processes only).
+  void refreshVelocities(StepContext<D>& sys);
+  // A failed solve: NumericalFailure, shared by every process in a run across processes.
+  [[noreturn]] void fail(const std::string& message) const;
   void predictorStep(StepContext<D>& sys, double dt);
   void relaxDensity(StepContext<D>& sys, double dt);
   void correctPositions(StepContext<D>& sys, double dt, double* y);

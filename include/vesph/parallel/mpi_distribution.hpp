@@ -14,9 +14,12 @@ namespace vesph {
 // cutoff: the kernel support; skin: the neighbour list's (the halo holds every particle within
 // cutoff + skin of a part, and the particles are redistributed before any has moved half the
 // skin); imbalance_tolerance: the share of the moving particles over the mean above which a
-// redistribution repartitions instead of only moving particles across the kept cuts.
+// redistribution repartitions instead of only moving particles across the kept cuts;
+// halo_supports: how many kernel supports deep the halo is (1: the pair loops; 2: a step hook
+// that composes two neighbourhoods, the ISPH projection's walls: StepHook::haloSupports), the
+// halo then holding every particle within halo_supports * cutoff + skin.
 template <int D>
 std::unique_ptr<ParticleDistribution<D>> makeMpiDistribution(const Domain<D>& domain, double cutoff, double skin,
-                                                             double imbalance_tolerance);
+                                                             double imbalance_tolerance, int halo_supports = 1);
 
 }  // namespace vesph

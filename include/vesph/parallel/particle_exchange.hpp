@@ -18,19 +18,12 @@
 #include <span>
 #include <vector>
 
+#include "vesph/core/distribution.hpp"  // HaloArray
 #include "vesph/core/particles.hpp"
 #include "vesph/parallel/communicator.hpp"
 #include "vesph/parallel/space_partition.hpp"
 
 namespace vesph {
-
-// One array the halo refresh copies to the ghosts: `components` doubles per particle, laid out
-// over `range` (all: every particle; moving: [0, n_moving); fixed: [n_moving, size())).
-struct HaloArray {
-  double* data;
-  int components;
-  Field::Range range;
-};
 
 struct HaloLayout {
   std::size_t owned_moving = 0, ghost_moving = 0, owned_fixed = 0, ghost_fixed = 0;

@@ -50,6 +50,9 @@ class StateEvaluator {
   // probe of an implicit-explicit integrator, whose velocities may be perturbed): the fields it
   // wrote (the velocity gradient) are then not those of an integrated state.
   virtual bool lastEvaluationImplicit() const = 0;
+  // A run across processes: the ghosts take their owners' state as it was last unpacked
+  // (positions, velocities, densities, evolving fields; nothing in a serial run). Collective.
+  virtual void refreshGhosts() = 0;
 
  protected:
   ~StateEvaluator() = default;
@@ -81,6 +84,7 @@ class StepContext {
   void unpack(const double* y) const { state_.unpack(y); }
   void evaluate(double t, const double* y, double* ydot) const { state_.evaluate(t, y, ydot); }
   bool lastEvaluationImplicit() const { return state_.lastEvaluationImplicit(); }
+  void refreshGhosts() const { state_.refreshGhosts(); }
   // One effect's pass over the particle set as it is, at time t (a hook that needs a field of
   // the current state: the free-surface flags, the velocity gradient).
   void runEffect(Effect<D>* effect, double t) const {
@@ -141,6 +145,9 @@ class StepHook {
   // Effect::saveCarried / restoreCarried.
   virtual void saveCarried(NamedArrays& out) const {}
   virtual void restoreCarried(const ArrayLookup& find) {}
+  // The arrays of saveCarried that hold one value per particle of the set, in its order (with
+  // the halo in a run across processes): they travel with the particles (the ISPH pressure).
+  virtual std::vector<std::string> carriedPerParticle() const { return {}; }
   // Per-step diagnostics columns of this hook (names fixed at setup) and their last values.
   // In a run across processes, the whole run's (every process calls it; collective).
   virtual std::vector<std::string> diagnosticsColumns() const { return {}; }
@@ -160,6 +167,10 @@ class StepHook {
   virtual bool distributable() const { return false; }
   virtual void distributing(ParticleSet<D>& whole) {}
   virtual void redistributed(StepContext<D>& system) {}
+  // How many kernel supports deep the halo must be for this hook (1: what the pair loops need;
+  // the ISPH projection eliminates the walls' pressures, which reach a support further, into
+  // the fluid rows: 2).
+  virtual int haloSupports() const { return 1; }
   void setDistribution(ParticleDistribution<D>* distribution) { distribution_ = distribution; }
 
  protected:

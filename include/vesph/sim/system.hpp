@@ -90,6 +90,9 @@ class SphSystem final : public OdeSystem, public StateEvaluator {
   // The same evaluation without counting it (derived fields for output, tests, hooks).
   void evaluate(double t, const double* y, double* ydot) override;
   bool lastEvaluationImplicit() const override { return last_evaluation_implicit_; }
+  void refreshGhosts() override {
+    if (distribution) distribution->refreshState(particles, evolving_);
+  }
   StabilitySnapshot stability() const override;
   // One part of the right-hand side for implicit-explicit integrators (OdeSystem::rhsPart):
   // the explicit part runs every effect except those whose whole contribution is implicit
