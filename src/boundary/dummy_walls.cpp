@@ -38,6 +38,27 @@ void DummyWalls<D>::setup(Setup<D>& s) {
       any_image_ = true;
       if (points_[k].depth > 0) images_.push_back(static_cast<Index>(n0 + k));
     }
+  if (!points_.empty() && !any_image_) {
+    point_field_ = &s.particles.fields.require("wall_point", kPointComponents, Field::Range::fixed);
+    point_field_->refreshed_in_halo = false;  // set once; the ghosts get it with the halo
+  }
+}
+
+template <int D>
+void DummyWalls<D>::fieldsAllocated(ParticleSet<D>&) {
+  if (!point_field_) return;
+  for (std::size_t k = 0; k < points_.size(); ++k) {
+    const WallPoint<D>& w = points_[k];
+    double* f = point_field_->at(k);
+    f[0] = w.polar ? 1.0 : 0.0;
+    f[1] = w.linear_stress ? 1.0 : 0.0;
+    f[2] = w.centroid ? 1.0 : 0.0;
+    f[3] = w.pressure_floor;
+    for (int a = 0; a < D; ++a) {
+      f[4 + a] = w.axis_point[a];
+      f[4 + D + a] = w.axis[a];
+    }
+  }
 }
 
 namespace {
@@ -380,6 +401,22 @@ void DummyWalls<D>::imageParticle(const RhsContext<D>& ctx, const NeighbourList<
 
 template <int D>
 void DummyWalls<D>::resized(const ParticleRemap& remap) {
+  if (point_field_) {  // the set's fixed particles as they are now (a redistribution moves them)
+    points_.assign(point_field_->data.size() / kPointComponents, WallPoint<D>{});
+    for (std::size_t k = 0; k < points_.size(); ++k) {
+      const double* f = point_field_->at(k);
+      WallPoint<D>& w = points_[k];
+      w.polar = f[0] > 0.5;
+      w.linear_stress = f[1] > 0.5;
+      w.centroid = f[2] > 0.5;
+      w.pressure_floor = f[3];
+      for (int a = 0; a < D; ++a) {
+        w.axis_point[a] = f[4 + a];
+        w.axis[a] = f[4 + D + a];
+      }
+    }
+    return;
+  }
   // Fixed particles keep their order; their indices move with the count of moving ones.
   for (Index& w : images_) w = remap.fixedIndex(w);
   for (WallPoint<D>& wp : points_)

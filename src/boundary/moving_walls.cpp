@@ -72,29 +72,50 @@ void MovingWalls<D>::setup(Setup<D>& s) {
   acceleration_ = &s.particles.fields.require("wall_acceleration", D, Field::Range::fixed);
   for (const WallMotion<D>& m : motions_)
     if (m.rotates()) spin_ = &s.particles.fields.require("wall_spin", kSpinComponents, Field::Range::fixed);
+  // The particles' motions and reference positions as fields: set once, never refreshed (the
+  // ghosts get them with the halo).
+  reference_position_ = &s.particles.fields.require("wall_reference", D, Field::Range::fixed);
+  motion_of_ = &s.particles.fields.require("wall_motion", 1, Field::Range::fixed);
+  reference_position_->refreshed_in_halo = motion_of_->refreshed_in_halo = false;
+}
+
+template <int D>
+void MovingWalls<D>::fieldsAllocated(ParticleSet<D>&) {
+  if (reference_.size() != reference_position_->data.size())
+    throw std::logic_error("moving walls: the reference positions do not cover the fixed particles");
+  reference_position_->data = std::move(reference_);
+  reference_.clear();
+  std::fill(motion_of_->data.begin(), motion_of_->data.end(), -1.0);
+  for (std::size_t m = 0; m < motions_.size(); ++m)
+    for (std::size_t k = motions_[m].first; k < motions_[m].first + motions_[m].count; ++k)
+      motion_of_->data[k] = static_cast<double>(m);
 }
 
 template <int D>
 void MovingWalls<D>::place(double t, ParticleSet<D>& p) {
-  const std::size_t n0 = p.n_moving;
+  // Every fixed particle the set holds (a distributed run's ghosts too: they are placed here
+  // as their owners are, at the same time).
+  const std::size_t n0 = p.n_moving, n_fixed = p.nFixed();
   double* acc = acceleration_->data.data();
   double* spin = spin_ ? spin_->data.data() : nullptr;
-  for (const WallMotion<D>& m : motions_) {
-    const double f = m.factor(t);
-#pragma omp parallel for schedule(static) if (m.count >= kParallelMinimum)
-    for (std::size_t k = m.first; k < m.first + m.count; ++k) {
-      if (spin)
-        for (int c = 0; c < kSpinComponents; ++c)
-          spin[kSpinComponents * k + c] = f * m.angular_velocity[D == 2 ? 2 : c];
-      Vec<D> x0, x, u, a;
-      for (int c = 0; c < D; ++c) x0[c] = reference_[D * k + c];
-      kinematics(m, t, x0, x, u, a);
-      const std::size_t w = n0 + k;
-      for (int c = 0; c < D; ++c) {
-        p.position[D * w + c] = domain_.wrap(c, x[c]);
-        p.velocity[D * w + c] = u[c];
-        acc[D * k + c] = a[c];
-      }
+  const double* reference = reference_position_->data.data();
+  const double* motion_of = motion_of_->data.data();
+#pragma omp parallel for schedule(static) if (n_fixed >= kParallelMinimum)
+  for (std::size_t k = 0; k < n_fixed; ++k) {
+    if (motion_of[k] < 0) continue;
+    const WallMotion<D>& m = motions_[static_cast<std::size_t>(motion_of[k])];
+    if (spin) {
+      const double f = m.factor(t);
+      for (int c = 0; c < kSpinComponents; ++c) spin[kSpinComponents * k + c] = f * m.angular_velocity[D == 2 ? 2 : c];
+    }
+    Vec<D> x0, x, u, a;
+    for (int c = 0; c < D; ++c) x0[c] = reference[D * k + c];
+    kinematics(m, t, x0, x, u, a);
+    const std::size_t w = n0 + k;
+    for (int c = 0; c < D; ++c) {
+      p.position[D * w + c] = domain_.wrap(c, x[c]);
+      p.velocity[D * w + c] = u[c];
+      acc[D * k + c] = a[c];
     }
   }
 }

@@ -190,7 +190,7 @@ bool OutputWriter<D>::agreed(bool ok) const {
 template <int D>
 OutputWriter<D>::OutputWriter(const std::string& dir, const std::string& name, const FileAttributes& attrs,
                               double resume_time, const void* communicator)
-    : dir_(dir), name_(name), extra_columns_(attrs.extra_columns), gauges_(attrs.gauges), communicator_(communicator) {
+    : communicator_(communicator), dir_(dir), name_(name), extra_columns_(attrs.extra_columns), gauges_(attrs.gauges) {
 #if VESPH_HAVE_MPI_RUNS
   if (communicator_) MPI_Comm_rank(*static_cast<const MPI_Comm*>(communicator_), &rank_);
 #endif
@@ -395,7 +395,7 @@ void OutputWriter<D>::writeCheckpoint(const Checkpoint& c, const CheckpointRows*
 template <int D>
 OutputWriter<D>::OutputWriter(const std::string& dir, const std::string& name, const FileAttributes& attrs,
                               const void* communicator)
-    : dir_(dir), name_(name), extra_columns_(attrs.extra_columns), gauges_(attrs.gauges), communicator_(communicator) {
+    : communicator_(communicator), dir_(dir), name_(name), extra_columns_(attrs.extra_columns), gauges_(attrs.gauges) {
   if (extra_columns_.size() > kMaxExtraDiagnostics) throw std::logic_error("too many extra diagnostics columns");
 #if VESPH_HAVE_MPI_RUNS
   if (communicator_) MPI_Comm_rank(*static_cast<const MPI_Comm*>(communicator_), &rank_);

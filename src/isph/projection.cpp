@@ -183,7 +183,10 @@ void Projection<D>::surfacePressures(StepContext<D>& sys, double t) {
   // an implicit-explicit integrator, at a perturbed velocity: the gradient is shared with the
   // implicit part when the stress form or a linear stress rate is implicit), kappa of the state
   // being projected instead.
-  if (sys.lastEvaluationImplicit()) sys.runEffect(ss.gradient_effect, t);
+  if (sys.lastEvaluationImplicit()) {
+    sys.runEffect(ss.gradient_effect, t);
+    if (this->distribution()) this->distribution()->refreshFields(sys.particles);
+  }
   const ParticleSet<D>& P = sys.particles;
   const std::size_t n = P.n_moving;
   if (!ss.velocity_gradient) {

@@ -171,7 +171,11 @@ class SecondOrderFluid final : public PairEffect<D, SecondOrderFluid<D>> {
       accel_ = &s.particles.fields.require("lagged_acceleration", D);
       accel_->extrapolated_to_walls = true;
       accel_->transform = Field::Transform::vector;
-      previous_velocity_.assign(s.particles.velocity.begin(), s.particles.velocity.begin() + D * s.particles.n_moving);
+      // A field, so that it travels with the particles (a run across processes); over every
+      // particle, as lagged_acceleration, so that a checkpoint carries both alike (the fixed
+      // particles' entries unused).
+      previous_velocity_ = &s.particles.fields.require("previous_velocity", D);
+      previous_velocity_->refreshed_in_halo = false;  // read by the owner only
       const auto [nested, laplacian] = largestDerivativeSymbols<D>(s.kernel, s.spacing);
       // The alpha1 term of div(eps) is c1 div(G + G^T): c1 lap(a) for a transverse wave, twice
       // that, c1 (lap a + grad div a), for a longitudinal one: the factor 2.
@@ -189,6 +193,11 @@ class SecondOrderFluid final : public PairEffect<D, SecondOrderFluid<D>> {
     }
   }
 
+  void fieldsAllocated(ParticleSet<D>& p) override {
+    moving_ = p.n_moving;
+    if (lagged_) std::copy(p.velocity.begin(), p.velocity.begin() + D * p.n_moving, previous_velocity_->data.begin());
+  }
+
   void stability(StabilityInputs& in) const override {
     // Without [effects.viscosity] (procedures 1, 2, 4) this effect carries the viscous stress.
     if (procedure_ != 3) in.kinematic_viscosity = std::max(in.kinematic_viscosity, law_.mu / rho0_);
@@ -202,24 +211,35 @@ class SecondOrderFluid final : public PairEffect<D, SecondOrderFluid<D>> {
   void afterStep(const AcceptedStep<D>& step) override {
     if (!lagged_ || !(step.dt > 0)) return;
     double* a = accel_->data.data();
+    double* previous = previous_velocity_->data.data();
     const std::size_t n = step.n_moving * D;
     const double inv_dt = 1.0 / step.dt;
 #pragma omp parallel for schedule(static) if (step.n_moving >= kParallelMinimum)
     for (std::size_t k = 0; k < n; ++k) {
-      a[k] = (step.velocity[k] - previous_velocity_[k]) * inv_dt;
-      previous_velocity_[k] = step.velocity[k];
+      a[k] = (step.velocity[k] - previous[k]) * inv_dt;
+      previous[k] = step.velocity[k];
     }
   }
 
   void saveCarried(NamedArrays& out) const override {
     if (!lagged_) return;
     out.emplace_back("lagged_acceleration", accel_->data);
-    out.emplace_back("previous_velocity", previous_velocity_);
+    out.emplace_back("previous_velocity", previous_velocity_->data);
+  }
+  std::vector<PerParticleArray> carriedPerParticle() const override {
+    if (!lagged_) return {};
+    return {{"lagged_acceleration", D}, {"previous_velocity", D}};
   }
   void restoreCarried(const ArrayLookup& find) override {
     if (!lagged_) return;
-    for (auto [aname, target] : {std::pair{"lagged_acceleration", &accel_->data}, std::pair{"previous_velocity", &previous_velocity_}}) {
+    for (auto [aname, target] : {std::pair{"lagged_acceleration", &accel_->data}, std::pair{"previous_velocity", &previous_velocity_->data}}) {
       const std::vector<double>* values = find(aname);
+      // A checkpoint of an older vesph holds the previous velocity of the moving particles only.
+      if (values && target == &previous_velocity_->data && values->size() < target->size() &&
+          values->size() == static_cast<std::size_t>(D) * moving_) {
+        std::copy(values->begin(), values->end(), target->begin());
+        continue;
+      }
       if (!values || values->size() != target->size())
         throw InputError(std::string("--resume: the checkpoint lacks the lagged material derivative's ") + aname +
                          " (or it has another size)");
@@ -231,10 +251,12 @@ class SecondOrderFluid final : public PairEffect<D, SecondOrderFluid<D>> {
     if (!lagged_) return;
     // A released particle starts with its velocity as the previous one (no lagged rate yet
     // beyond the buffer's extrapolated value, which the particle set carried over).
-    remap.apply(previous_velocity_, D, Field::Range::moving);
+    // (The field itself followed the particles with the set.)
+    moving_ = p.n_moving;
+    double* previous = previous_velocity_->data.data();
     for (std::size_t i = 0; i < remap.newMoving(); ++i)
       if (remap.source[i] >= remap.old_moving)
-        for (int a = 0; a < D; ++a) previous_velocity_[D * i + a] = p.velocity[D * i + a];
+        for (int a = 0; a < D; ++a) previous[D * i + a] = p.velocity[D * i + a];
   }
 
   // The pair pass: the gradient of the lagged acceleration (eq. 3.16) and, for procedure 4,
@@ -332,7 +354,8 @@ class SecondOrderFluid final : public PairEffect<D, SecondOrderFluid<D>> {
   Field* extra_ = nullptr;
   Field* elastic_ = nullptr;
   Field* accel_ = nullptr;
-  std::vector<double> previous_velocity_;
+  Field* previous_velocity_ = nullptr;  // previous_velocity: v at the last accepted step
+  std::size_t moving_ = 0;              // the moving particles (an older checkpoint's layout)
 };
 
 }  // namespace

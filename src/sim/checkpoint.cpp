@@ -12,17 +12,18 @@ namespace vesph {
 
 template <int D>
 void Checkpoints<D>::join(std::string prefix, RestoreStage stage, Save save, Restore restore,
-                          std::vector<std::string> per_particle) {
+                          std::vector<PerParticleArray> per_particle) {
   Carrier c{std::move(prefix), stage, std::move(save), std::move(restore), {}};
-  for (const std::string& name : per_particle) c.per_particle.push_back(arrayName(c, name));
+  for (const PerParticleArray& a : per_particle) c.per_particle.push_back({arrayName(c, a.name), a.components});
   carriers_.push_back(std::move(c));
 }
 
 template <int D>
-bool Checkpoints<D>::particleLaidOut(const std::string& name) const {
+int Checkpoints<D>::particleLaidOut(const std::string& name) const {
   for (const Carrier& c : carriers_)
-    if (std::find(c.per_particle.begin(), c.per_particle.end(), name) != c.per_particle.end()) return true;
-  return false;
+    for (const PerParticleArray& a : c.per_particle)
+      if (a.name == name) return a.components;
+  return 0;
 }
 
 template <int D>
@@ -36,7 +37,7 @@ void Checkpoints<D>::joinScene() {
     Effect<D>* effect = e.get();
     join(std::string(effect->name()), RestoreStage::scene,
          [effect](double, NamedArrays& out) { effect->saveCarried(out); },
-         [effect](const ArrayLookup& find) { effect->restoreCarried(find); });
+         [effect](const ArrayLookup& find) { effect->restoreCarried(find); }, effect->carriedPerParticle());
   }
   if (system_.changesParticleSet())  // the particle set itself is part of the restart point
     join("", RestoreStage::particle_set, [this](double, NamedArrays& out) { saveParticleSet(out); },
@@ -106,12 +107,15 @@ void Checkpoints<D>::attachRows(ParticleSet<D>& owned, const Checkpoint& local) 
   // of `owned`).
   const ParticleSet<D>& p = system_.particles;
   for (const auto& [aname, values] : local.arrays) {
-    if (!particleLaidOut(aname)) continue;
-    if (values.size() != p.size()) throw std::logic_error("checkpoint array " + aname + " is not one value per particle");
-    Field& rows = owned.fields.require(kRowsPrefix + aname, 1, Field::Range::all);
-    rows.data.assign(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(p.ownedMoving()));
-    rows.data.insert(rows.data.end(), values.begin() + static_cast<std::ptrdiff_t>(p.n_moving),
-                     values.begin() + static_cast<std::ptrdiff_t>(p.ownedEnd()));
+    const int cols = particleLaidOut(aname);
+    if (cols == 0) continue;
+    const auto c = static_cast<std::ptrdiff_t>(cols);
+    if (values.size() != p.size() * static_cast<std::size_t>(cols))
+      throw std::logic_error("checkpoint array " + aname + " is not laid out per particle");
+    Field& rows = owned.fields.require(kRowsPrefix + aname, cols, Field::Range::all);
+    rows.data.assign(values.begin(), values.begin() + c * static_cast<std::ptrdiff_t>(p.ownedMoving()));
+    rows.data.insert(rows.data.end(), values.begin() + c * static_cast<std::ptrdiff_t>(p.n_moving),
+                     values.begin() + c * static_cast<std::ptrdiff_t>(p.ownedEnd()));
   }
 }
 
@@ -122,7 +126,8 @@ CheckpointRows Checkpoints<D>::shareLayout(const OutputShare<D>& share) const {
   if (system_.changesParticleSet())
     rows.particle_arrays = {{"particles.position", D}, {"particles.velocity", D}, {"particles.mass", 1}};
   for (const Carrier& c : carriers_)
-    for (const std::string& name : c.per_particle) rows.particle_arrays.emplace_back(name, 1);
+    for (const PerParticleArray& a : c.per_particle)
+      rows.particle_arrays.emplace_back(a.name, static_cast<std::size_t>(a.components));
   return rows;
 }
 
@@ -279,17 +284,18 @@ void Checkpoints<D>::validatePositions(const Checkpoint& ck, const ResumeRules& 
 }
 
 template <int D>
-std::vector<double> Checkpoints<D>::byId(const Checkpoint& ck, const std::vector<double>& values) const {
+std::vector<double> Checkpoints<D>::byId(const Checkpoint& ck, const std::vector<double>& values, int components) const {
   std::unordered_map<std::uint64_t, std::size_t> row_of;
   row_of.reserve(ck.id.size());
   for (std::size_t j = 0; j < ck.id.size(); ++j) row_of.emplace(ck.id[j], j);
   const ParticleSet<D>& p = system_.particles;
-  std::vector<double> part(p.size());
-  bool found = values.size() == ck.id.size();
+  const auto cols = static_cast<std::size_t>(components);
+  std::vector<double> part(p.size() * cols);
+  bool found = values.size() == ck.id.size() * cols;
   for (std::size_t i = 0; i < p.size() && found; ++i) {
     const auto it = row_of.find(p.id[i]);
     found = it != row_of.end();
-    if (found) part[i] = values[it->second];
+    if (found) std::copy_n(values.begin() + static_cast<std::ptrdiff_t>(cols * it->second), cols, part.begin() + static_cast<std::ptrdiff_t>(cols * i));
   }
   if (system_.distribution->sum(static_cast<std::uint64_t>(found ? 0 : 1)) != 0) throw anotherParticleSet();
   return part;
@@ -346,8 +352,8 @@ void Checkpoints<D>::resumeDistributed(Checkpoint& ck) {
   state_.resize(system_.size());
   system_.pack(state_.data());
   for (auto& [aname, values] : ck.arrays) {
-    if (particleLaidOut(aname)) {
-      values = byId(ck, values);
+    if (const int cols = particleLaidOut(aname)) {
+      values = byId(ck, values, cols);
       continue;
     }
     // The rest is the same on every process (the ISPH solver's totals): as written.
@@ -403,7 +409,7 @@ Checkpoint Checkpoints<D>::resume(const std::string& dir, const ResumeRules& rul
     system_.pack(state_.data());
     for (auto& [aname, values] : ck.arrays) {
       if (stateLaidOut(aname)) values = ownedPart(ck, values);
-      else if (particleLaidOut(aname)) values = byId(ck, values);
+      else if (const int cols = particleLaidOut(aname)) values = byId(ck, values, cols);
     }
     ck.state.clear();
     return std::move(src.checkpoint);

@@ -132,17 +132,9 @@ void Simulation<D>::distribute() {
   for (const auto& hk : system_.hooks)
     if (!hk->distributable())
       missing.push_back("the hook " + std::string(hk->name()));
-  if (!wall_points_.empty())
-    missing.push_back("per-particle wall treatments (image walls, pressure_floor, polar frames, stress_extrapolation)");
-  if (system_.movesFixed()) missing.push_back("moving walls");
-  for (const auto& e : system_.effects)
-    if (e->name() == "second_order_fluid" || e->name() == "particle_shifting")
-      missing.push_back("the effect " + std::string(e->name()) + " (it carries per-particle values between steps)");
-  const std::string& integ = integrator_name_;
-  const bool distributed_integrator = integ == "leapfrog" || integ == "midpoint" || integ == "symplectic" ||
-                                      integ == "arkode" || integ == "arkode-fixed";
-  if (!distributed_integrator)
-    missing.push_back("the integrator " + integ + " (leapfrog, midpoint, symplectic, arkode and arkode-fixed run distributed)");
+  if (std::any_of(wall_points_.begin(), wall_points_.end(), [](const WallPoint<D>& w) { return w.image; }))
+    missing.push_back("image walls (treatment = \"image\": each wall particle keeps the index of its boundary particle)");
+  // Every integrator runs distributed (the implicit ones' Krylov solves span the processes).
   if (!missing.empty()) {
     std::string what = config_.file() + ": a run across processes (mpirun -np N, N > 1) does not support yet (issue 36): ";
     for (std::size_t k = 0; k < missing.size(); ++k) what += (k ? "; " : "") + missing[k];

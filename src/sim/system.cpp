@@ -44,6 +44,9 @@ void SphSystem<D>::setup(double spacing, double rest_density, double viscosity, 
   }
   for (auto& e : effects) e->setup(s);
   particles.resizeFields();
+  for (auto& b : boundaries) b->fieldsAllocated(particles);
+  for (auto& e : effects) e->fieldsAllocated(particles);
+  effects_carry_ = std::any_of(effects.begin(), effects.end(), [](const auto& e) { return !e->carriedPerParticle().empty(); });
   for (Field* f : evolving_)
     if (f->range == Field::Range::fixed) throw std::logic_error("field " + f->name + " cannot evolve: it covers fixed particles only");
   field_rates_.assign(evolving_.size(), nullptr);
@@ -335,9 +338,13 @@ bool SphSystem<D>::implicitVelocityOperator(double t, const double* y, CsrMatrix
       if (e->couplesVelocities()) coupling.push_back(e);
   if (coupling.empty()) return false;
   unpack(y);
+  if (distribution) distribution->refreshState(particles, evolving_);
   placeFixed(t);
   if (neighbours.update(particles)) driver.prepare(neighbours);
-  const std::size_t n = particles.n_moving;
+  // The rows of the state's particles. In a run across processes the couplings to ghosts are
+  // left out: the operator is this process's diagonal block (a block-Jacobi preconditioner of
+  // arkode-imex's stage systems, whose Krylov solve spans every process).
+  const std::size_t n = particles.ownedMoving();
   coupling_rows_.resize(n);
   const RhsContext<D> ctx{particles, kernel, domain, t, nullptr, nullptr, nullptr, field_rates_.data(), RhsPart::implicit_diagonal};
   wall_dependence_.assign(particles.nFixed(), 0.0);
@@ -351,7 +358,13 @@ bool SphSystem<D>::implicitVelocityOperator(double t, const double* y, CsrMatrix
                        });
   L.row_start.assign(n + 1, 0);
   for (std::size_t i = 0; i < n; ++i)
-    L.row_start[i + 1] = L.row_start[i] + 1 + static_cast<int>(coupling_rows_[i].entries.size());
+  {
+    auto& entries = coupling_rows_[i].entries;
+    if (distribution)
+      entries.erase(std::remove_if(entries.begin(), entries.end(), [n](const auto& e) { return static_cast<std::size_t>(e.first) >= n; }),
+                    entries.end());
+    L.row_start[i + 1] = L.row_start[i] + 1 + static_cast<int>(entries.size());
+  }
   L.column.resize(static_cast<std::size_t>(L.row_start[n]));
   L.value.resize(L.column.size());
 #pragma omp parallel for schedule(static) if (n >= kParallelMinimum)
@@ -414,6 +427,9 @@ bool SphSystem<D>::afterStep(double t, double dt, double* y) {
   const AcceptedStep<D> step{t, dt, n, y, y + n * D, y + n * (D + 1)};
   for (auto& e : effects) e->afterStep(step);
   if (distribution) {
+    // Values that effects carry per particle from step to step (the lagged second-order
+    // fluid's acceleration) were just written on the owned particles: the ghosts take them.
+    if (effects_carry_) distribution->refreshFields(particles);
     unpack(y);
     const RedistributionNeed need =
         distribution->needsRedistribution(particles, max_speed_ * dt, anyHook(&StepHook<D>::pendingChanges));

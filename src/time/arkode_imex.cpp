@@ -88,7 +88,7 @@ class ArkodeImex final : public Integrator {
     if (mem_) ARKStepFree(&mem_);
     if (linear_solver_) SUNLinSolFree(linear_solver_);
     if (nonlinear_solver_) SUNNonlinSolFree(nonlinear_solver_);
-    if (y_) N_VDestroy(y_);
+    destroyState(y_);
     if (atol_) N_VDestroy(atol_);
     if (sunctx_) SUNContext_Free(&sunctx_);
   }
@@ -100,7 +100,7 @@ class ArkodeImex final : public Integrator {
     sys_ = &system;
     t_ = t0;
     callbacks_ = ArkodeCallbackState{.sys = &system, .t_last_accepted = t0};
-    y_ = wrapState(y, sys_->size(), sunctx_);
+    y_ = wrapState(y, sys_->size(), sunctx_, sys_->stateCommunicator());
     resizable_ = system.mayResize();
     mem_ = ARKStepCreate(&ArkodeImex::explicitRhs, &ArkodeImex::implicitRhs, t0, y_, sunctx_);
     if (!mem_) throw std::runtime_error("ARKStepCreate failed");
@@ -146,7 +146,8 @@ class ArkodeImex final : public Integrator {
           os << " (the error test failed repeatedly or the step became too small: the solution is blowing up or the tolerances are too tight)";
         if (flag == ARK_CONV_FAILURE || flag == ARK_LSOLVE_FAIL)
           os << " (the implicit stage solve did not converge: try a smaller integrator.max_step)";
-        throw NumericalFailure(os.str());
+        // Every process's ARKODE decides from the same global norms (a distributed state).
+        throw SharedNumericalFailure(os.str());
       }
       if (flag == ARK_TSTOP_RETURN) t_ = tout;
       if (resizable_ && sys_->resizePending()) resize(tout);
@@ -212,9 +213,9 @@ class ArkodeImex final : public Integrator {
 
   void resize(double tout) {
     double* y = sys_->resizeState(t_, N_VGetArrayPointer(y_));
-    N_Vector fresh = wrapState(y, sys_->size(), sunctx_);
+    N_Vector fresh = wrapState(y, sys_->size(), sunctx_, sys_->stateCommunicator());
     checkArkode(ARKStepResize(mem_, fresh, 1.0, t_, nullptr, nullptr), "Resize");
-    N_VDestroy(y_);
+    destroyState(y_);
     y_ = fresh;
     setTolerances();
     attachStageSolver();  // its work vectors have the old length

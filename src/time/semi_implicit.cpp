@@ -27,6 +27,8 @@
 // or relaxation limit for the implicit terms) or integrator.step, as for the other fixed-step
 // integrators (fixed_step.hpp, which also carries f_E for checkpoints). Every evaluation of a
 // part, of the diagonal and of a product J w counts in stats().rhs_evals.
+#include <mpi.h>
+
 #include <omp.h>
 
 #include <algorithm>
@@ -54,6 +56,10 @@ class SemiImplicit final : public FixedStepIntegrator {
 
  protected:
   void allocate() override {
+    // A run across processes: the state is each process's part; every sum and maximum below is
+    // taken over all of them, so that every process makes the same GMRES decisions.
+    const void* communicator = sys_->stateCommunicator();
+    comm_ = communicator ? *static_cast<const MPI_Comm*>(communicator) : MPI_COMM_NULL;
     const StateSegments s = sys_->segments();
     implicit_begin_ = s.velocity_begin;
     m_ = n_ - implicit_begin_;
@@ -86,14 +92,14 @@ class SemiImplicit final : public FixedStepIntegrator {
   }
 
   void refreshDiagonal(double t) {
-    if (m_ == 0) return;
+    if (m_ == 0 && comm_ == MPI_COMM_NULL) return;  // across processes every process evaluates (collective)
     evaluatePart(RhsPart::implicit_diagonal, t, y_, diagonal_.data());
     diagonal_valid_ = true;
   }
 
   // S_I(tau) from time t on y_ (in place).
   void implicitHalfStep(double t, double tau) {
-    if (m_ == 0) return;
+    if (m_ == 0 && comm_ == MPI_COMM_NULL) return;
     const std::size_t begin = implicit_begin_;
     const double gamma_tau = kGamma * tau;
     // Jacobi: diag(I - gamma tau J)^{-1}; J_kk <= 0 for the implicit terms.
@@ -125,6 +131,7 @@ class SemiImplicit final : public FixedStepIntegrator {
     base_max_ = 0;
 #pragma omp parallel for reduction(max : base_max_) schedule(static) if (m_ >= kParallelMinimumValues)
     for (std::size_t i = 0; i < m_; ++i) base_max_ = std::max(base_max_, std::abs(base_[begin + i]));
+    base_max_ = globalMax(base_max_);
     setWeights(tau);
     gmres(t, gamma_tau, k);
   }
@@ -138,6 +145,7 @@ class SemiImplicit final : public FixedStepIntegrator {
     for (int s = 0; s < 2; ++s)
       for (std::size_t i = bounds[s]; i < bounds[s + 1]; ++i)
         scale[s] = std::max(scale[s], std::abs(base_[begin + i]) / tau + std::abs(b_[i]));
+    if (comm_ != MPI_COMM_NULL) MPI_Allreduce(MPI_IN_PLACE, scale, 2, MPI_DOUBLE, MPI_MAX, comm_);
     const double largest = std::max(scale[0], scale[1]);
     for (int s = 0; s < 2; ++s) {
       const double w = 1.0 / (scale[s] > 0 ? scale[s] : (largest > 0 ? largest : 1.0));
@@ -151,6 +159,7 @@ class SemiImplicit final : public FixedStepIntegrator {
     double u_max = 0;
 #pragma omp parallel for reduction(max : u_max) schedule(static) if (m_ >= kParallelMinimumValues)
     for (std::size_t i = 0; i < m_; ++i) u_max = std::max(u_max, std::abs(u[i]));
+    u_max = globalMax(u_max);
     if (u_max == 0) {
       std::fill(out, out + m_, 0.0);
       return;
@@ -167,7 +176,8 @@ class SemiImplicit final : public FixedStepIntegrator {
 
   // Dot product with a fixed partition per thread count, summed in order: the same result
   // from run to run (an OpenMP reduction may combine in any order).
-  double dot(const double* a, const double* b) {
+  double dot(const double* a, const double* b) { return globalSum(localDot(a, b)); }
+  double localDot(const double* a, const double* b) {
     if (m_ < kParallelMinimumValues) {
       double s = 0;
       for (std::size_t i = 0; i < m_; ++i) s += a[i] * b[i];
@@ -201,7 +211,7 @@ class SemiImplicit final : public FixedStepIntegrator {
 #pragma omp parallel for schedule(static) if (m_ >= kParallelMinimumValues)
     for (std::size_t i = 0; i < m_; ++i) r[i] = weight_[i] * b_[i];
     double beta = std::sqrt(dot(r, r));
-    if (!std::isfinite(beta)) throw NumericalFailure(failure(t, "the implicit part is not finite"));
+    if (!std::isfinite(beta)) fail(t, "the implicit part is not finite");
     if (beta == 0) return;
     const double b_norm = beta;
     const double target = linear_rtol_ * b_norm;
@@ -251,7 +261,7 @@ class SemiImplicit final : public FixedStepIntegrator {
         residual = std::abs(g[j + 1]);
         ++iterations;
         used = j + 1;
-        if (!std::isfinite(residual)) throw NumericalFailure(failure(t, "the Krylov iteration is not finite"));
+        if (!std::isfinite(residual)) fail(t, "the Krylov iteration is not finite");
         if (residual <= target || subdiagonal == 0 || iterations >= max_linear_iterations_) break;
       }
       // k += P^{-1} W^{-1} V c, H c = g (upper triangular).
@@ -275,15 +285,29 @@ class SemiImplicit final : public FixedStepIntegrator {
       for (std::size_t i = 0; i < m_; ++i) r[i] = weight_[i] * (b_[i] - x_[i]);
       beta = std::sqrt(dot(r, r));
       if (beta <= target) return;
-      if (!std::isfinite(beta)) throw NumericalFailure(failure(t, "the implicit part is not finite"));
+      if (!std::isfinite(beta)) fail(t, "the implicit part is not finite");
       if (iterations >= max_linear_iterations_) {
         std::ostringstream os;
         os << "the implicit stage solve did not converge in " << iterations
            << " GMRES iterations (integrator.max_linear_iterations): relative residual " << beta / b_norm
            << " > integrator.rtol = " << linear_rtol_ << "; take a smaller step (integrator.step, max_step)";
-        throw NumericalFailure(failure(t, os.str()));
+        fail(t, os.str());
       }
     }
+  }
+
+  double globalSum(double local) const {
+    if (comm_ != MPI_COMM_NULL) MPI_Allreduce(MPI_IN_PLACE, &local, 1, MPI_DOUBLE, MPI_SUM, comm_);
+    return local;
+  }
+  double globalMax(double local) const {
+    if (comm_ != MPI_COMM_NULL) MPI_Allreduce(MPI_IN_PLACE, &local, 1, MPI_DOUBLE, MPI_MAX, comm_);
+    return local;
+  }
+  // The stage solves' failures come from global values: every process meets them together.
+  [[noreturn]] void fail(double t, const std::string& what) const {
+    if (comm_ != MPI_COMM_NULL) throw SharedNumericalFailure(failure(t, what));
+    throw NumericalFailure(failure(t, what));
   }
 
   std::string failure(double t, const std::string& what) const {
@@ -297,6 +321,7 @@ class SemiImplicit final : public FixedStepIntegrator {
   std::size_t implicit_begin_ = 0, m_ = 0, velocity_count_ = 0;
   double base_max_ = 0;
   bool diagonal_valid_ = false;
+  MPI_Comm comm_ = MPI_COMM_NULL;  // the state's processes (a run across processes)
   // Full-length: the stage's base state, the probe state of J w, f_I's output, J's diagonal.
   std::vector<double> base_, probe_, implicit_rate_, diagonal_;
   // Implicit-length (from velocity_begin on): the stage right-hand side f_I(base), the stage

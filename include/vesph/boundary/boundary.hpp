@@ -14,6 +14,10 @@ class Boundary {
   virtual ~Boundary() = default;
   virtual std::string_view name() const = 0;
   virtual void setup(Setup<D>& s) = 0;
+  // Once the fields requested at setup are allocated (zeros), before anything runs: a boundary
+  // puts its per-particle values there (moving walls: each particle's motion and reference
+  // position, which then travel with it in a run across processes).
+  virtual void fieldsAllocated(ParticleSet<D>& particles) {}
   // A boundary that moves fixed particles (moving walls): place sets their positions and
   // velocities at time t; the system calls it before every right-hand-side evaluation (before
   // the neighbour list's update) and before the between-step hooks, and the neighbour list

@@ -97,6 +97,7 @@ class DummyWalls final : public Boundary<D> {
       : points_(std::move(points)), ambient_inlet_(ambient_inlet) {}
   std::string_view name() const override { return "dummy_walls"; }
   void setup(Setup<D>& s) override;
+  void fieldsAllocated(ParticleSet<D>& particles) override;
   void update(const RhsContext<D>& ctx, const NeighbourList<D>& list, PairDriver<D>& driver) override;
   void resized(const ParticleRemap& remap) override;
   // The no-slip mirror 2 u_w - (the fluid's Shepard average): -1; the boundary particles of
@@ -114,6 +115,11 @@ class DummyWalls final : public Boundary<D> {
   Vec<D> g_ = Vec<D>::Zero();
   double rho0_ = 1, dx_ = 1;
   std::vector<WallPoint<D>> points_;
+  // Without image walls, each fixed particle's treatment (polar frame, linear stress, pressure
+  // floor: kPointComponents values) is also a field, so that it travels with the particle in a
+  // run across processes: points_ is made again from it after the set changes (resized).
+  static constexpr int kPointComponents = 4 + 2 * D;
+  Field* point_field_ = nullptr;  // wall_point
   std::vector<Index> images_;     // the image particles (depth > 0), particle indices
   std::vector<char> is_stress_;   // per interpolated field: a stress tensor (n.S.n = 0 on the wall)
   bool any_image_ = false;

@@ -53,6 +53,7 @@ class MovingWalls final : public Boundary<D> {
   static constexpr int kSpinComponents = D == 2 ? 1 : 3;
   std::string_view name() const override { return "moving_walls"; }
   void setup(Setup<D>& s) override;
+  void fieldsAllocated(ParticleSet<D>& particles) override;
   bool movesFixed() const override { return true; }
   void place(double t, ParticleSet<D>& particles) override;
   void update(const RhsContext<D>&, const NeighbourList<D>&, PairDriver<D>&) override {}
@@ -64,10 +65,14 @@ class MovingWalls final : public Boundary<D> {
 
  private:
   std::vector<WallMotion<D>> motions_;
-  std::vector<double> reference_;
+  std::vector<double> reference_;  // until setup puts it into wall_reference
   const Domain<D>& domain_;
   Field* acceleration_ = nullptr;  // wall_acceleration, fixed particles
   Field* spin_ = nullptr;          // wall_spin f(t) omega, fixed particles (only when a block rotates)
+  // Per fixed particle, so that they travel with it in a run across processes (migrations, the
+  // halo): x_w(0), and the index of its motion in motions_ (-1: a wall at rest).
+  Field* reference_position_ = nullptr;  // wall_reference
+  Field* motion_of_ = nullptr;           // wall_motion
 };
 
 }  // namespace vesph

@@ -140,7 +140,7 @@ class Projection final : public StepHook<D> {
   // first guess) and the run's solver totals; on resume they replace what start() computed.
   void saveCarried(NamedArrays& out) const override;
   void restoreCarried(const ArrayLookup& find) override;
-  std::vector<std::string> carriedPerParticle() const override { return {"pressure"}; }
+  std::vector<PerParticleArray> carriedPerParticle() const override { return {{"pressure", 1}}; }
   std::vector<std::string> diagnosticsColumns() const override;
   void diagnostics(std::vector<double>& values) const override;
   void summarize(nlohmann::json& summary) const override;

@@ -113,6 +113,13 @@ struct StabilityInputs {
 // save them and look them up by name when restoring.
 using NamedArrays = std::vector<std::pair<std::string, std::vector<double>>>;
 using ArrayLookup = std::function<const std::vector<double>*(const std::string&)>;
+// A carried array with `components` values per particle of the set, in its order (with the halo
+// in a run across processes): it travels with the particles (Effect and StepHook
+// carriedPerParticle; docs/architecture.md "Distributing more").
+struct PerParticleArray {
+  std::string name;
+  int components = 1;
+};
 
 template <int D>
 class Effect;
@@ -187,6 +194,9 @@ class Effect {
 
   // Request fields, check prerequisites (throw InputError with the fix in the message).
   virtual void setup(Setup<D>& s) {}
+  // Once the fields requested at setup are allocated (zeros), before anything runs: an effect
+  // puts initial per-particle values there (the lagged second-order fluid's previous velocity).
+  virtual void fieldsAllocated(ParticleSet<D>& particles) {}
   // A constant body acceleration this effect applies (for wall pressure and sound speed).
   virtual Vec<D> bodyAcceleration() const { return Vec<D>::Zero(); }
   // If this effect is the scheme's pressure closure, return it.
@@ -227,6 +237,8 @@ class Effect {
   // pair (StepHook).
   virtual void saveCarried(NamedArrays& out) const {}
   virtual void restoreCarried(const ArrayLookup& find) {}
+  // The arrays of saveCarried that hold values per particle of the set (PerParticleArray).
+  virtual std::vector<PerParticleArray> carriedPerParticle() const { return {}; }
 
   // Per-particle preparation for a pair effect, for values that the pair term reads for every
   // neighbour j and that are expensive per pair (the artificial stress R_j, Fang eqs. 40-44):

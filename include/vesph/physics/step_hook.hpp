@@ -145,9 +145,9 @@ class StepHook {
   // Effect::saveCarried / restoreCarried.
   virtual void saveCarried(NamedArrays& out) const {}
   virtual void restoreCarried(const ArrayLookup& find) {}
-  // The arrays of saveCarried that hold one value per particle of the set, in its order (with
-  // the halo in a run across processes): they travel with the particles (the ISPH pressure).
-  virtual std::vector<std::string> carriedPerParticle() const { return {}; }
+  // The arrays of saveCarried that hold values per particle of the set, in its order (with the
+  // halo in a run across processes): they travel with the particles (the ISPH pressure).
+  virtual std::vector<PerParticleArray> carriedPerParticle() const { return {}; }
   // Per-step diagnostics columns of this hook (names fixed at setup) and their last values.
   // In a run across processes, the whole run's (every process calls it; collective).
   virtual std::vector<std::string> diagnosticsColumns() const { return {}; }

@@ -49,10 +49,10 @@ class Checkpoints {
 
   // One carrier: its arrays are written as "<prefix>.<name>" (an empty prefix: the names as
   // given), in the order the carriers joined.
-  // per_particle: the names of the carrier's arrays that hold one value per particle of the set,
-  // in its order (with the halo in a run across processes: StepHook::carriedPerParticle).
+  // per_particle: the carrier's arrays that hold values per particle of the set, in its order
+  // (with the halo in a run across processes: Effect / StepHook::carriedPerParticle).
   void join(std::string prefix, RestoreStage stage, Save save, Restore restore,
-            std::vector<std::string> per_particle = {});
+            std::vector<PerParticleArray> per_particle = {});
   // The scene's carriers: the effects, the particle set when it may change, the hooks.
   void joinScene();
   void joinIntegrator(Integrator& integrator);
@@ -86,14 +86,14 @@ class Checkpoints {
     RestoreStage stage;
     Save save;
     Restore restore;
-    std::vector<std::string> per_particle;  // full array names
+    std::vector<PerParticleArray> per_particle;  // full array names
   };
-  // Whether a carried array holds one value per particle (a Carrier's per_particle): across
-  // processes it travels as the frame's rows and is taken back by id.
-  bool particleLaidOut(const std::string& name) const;
-  // A per-particle array of the checkpoint (ck.id's order) for every particle this process holds,
-  // its ghosts included, by id. Collective.
-  std::vector<double> byId(const Checkpoint& ck, const std::vector<double>& values) const;
+  // The values per particle of a carried array that a Carrier lists in per_particle (0: none of
+  // them): across processes it travels as the frame's rows and is taken back by id.
+  int particleLaidOut(const std::string& name) const;
+  // A per-particle array of the checkpoint (ck.id's order, `components` values each) for every
+  // particle this process holds, its ghosts included, by id. Collective.
+  std::vector<double> byId(const Checkpoint& ck, const std::vector<double>& values, int components) const;
   std::string arrayName(const Carrier& c, const std::string& name) const {
     return c.prefix.empty() ? name : c.prefix + "." + name;
   }

@@ -200,6 +200,7 @@ class SphSystem final : public OdeSystem, public StateEvaluator {
   std::uint64_t rhs_evals_ = 0;
   bool last_evaluation_implicit_ = false;  // see StateEvaluator::lastEvaluationImplicit
   bool redistribute_pending_ = false;      // a distributed run's halo must be rebuilt before the next step
+  bool effects_carry_ = false;             // some effect carries per-particle values between steps
   bool particle_changes_anywhere_ = false; // and some process's hooks add or remove particles
   std::uint64_t next_id_ = 0;
   std::optional<ParticleSet<D>> whole_scene_;  // see takeWholeScene
