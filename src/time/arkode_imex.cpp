@@ -31,6 +31,7 @@
 #include <sundials/sundials_context.h>
 #include <sunlinsol/sunlinsol_spgmr.h>
 #include <sunnonlinsol/sunnonlinsol_newton.h>
+#include <mpi.h>
 
 #include <algorithm>
 #include <cmath>
@@ -249,6 +250,14 @@ class ArkodeImex final : public Integrator {
     for (std::size_t k = begin; k < n; ++k) {
       w_max = std::max(w_max, std::abs(wv[k]));
       y_max = std::max(y_max, std::abs(yv[k]));
+    }
+    // Across processes the perturbation must be one and the same everywhere (the implicit part
+    // couples each process's values to its neighbours'), and every process must evaluate.
+    if (const void* communicator = self->sys_->stateCommunicator()) {
+      double maxima[2] = {w_max, y_max};
+      MPI_Allreduce(MPI_IN_PLACE, maxima, 2, MPI_DOUBLE, MPI_MAX, *static_cast<const MPI_Comm*>(communicator));
+      w_max = maxima[0];
+      y_max = maxima[1];
     }
     if (w_max == 0) {
       std::fill(out, out + n, 0.0);
