@@ -202,11 +202,10 @@ class AmgKrylovSolver final : public LinearSolver {
     // factor 10 of the tolerance, the recurrence's usual drift), so that a preconditioner
     // that broke down never passes for a solution. Across processes a non-finite value
     // anywhere makes the global residual non-finite everywhere.
-    int finite = x.allFinite() ? 1 : 0;
-    if (across_) MPI_Allreduce(MPI_IN_PLACE, &finite, 1, MPI_INT, MPI_MIN, communicator());
-    int good = error == 0 ? 1 : 0;
-    if (across_) MPI_Allreduce(MPI_IN_PLACE, &good, 1, MPI_INT, MPI_MIN, communicator());
-    r.ok = good && finite && r.residual <= 10 * options_.tolerance;
+    int agreed[2] = {x.allFinite() ? 1 : 0, error == 0 ? 1 : 0};  // finite, hypre's own success
+    if (across_) MPI_Allreduce(MPI_IN_PLACE, agreed, 2, MPI_INT, MPI_MIN, communicator());
+    const bool finite = agreed[0] != 0;
+    r.ok = agreed[1] != 0 && finite && r.residual <= 10 * options_.tolerance;
     if (!r.ok) {
       std::ostringstream os;
       if (!finite)

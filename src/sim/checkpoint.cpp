@@ -351,15 +351,16 @@ void Checkpoints<D>::resumeDistributed(Checkpoint& ck) {
   system_.rearrangeParticles(state_.data());
   state_.resize(system_.size());
   system_.pack(state_.data());
-  for (auto& [aname, values] : ck.arrays) {
-    if (const int cols = particleLaidOut(aname)) {
-      values = byId(ck, values, cols);
-      continue;
-    }
-    // The rest is the same on every process (the ISPH solver's totals): as written.
-    if (stateLaidOut(aname)) values = ownedPart(ck, values);
-  }
+  takeLocalParts(ck);
   ck.state.clear();
+}
+
+template <int D>
+void Checkpoints<D>::takeLocalParts(Checkpoint& ck) const {
+  for (auto& [aname, values] : ck.arrays) {
+    if (stateLaidOut(aname)) values = ownedPart(ck, values);
+    else if (const int cols = particleLaidOut(aname)) values = byId(ck, values, cols);
+  }
 }
 
 template <int D>
@@ -407,10 +408,7 @@ Checkpoint Checkpoints<D>::resume(const std::string& dir, const ResumeRules& rul
     system_.distribute();  // the restored set shared out again
     state_.resize(system_.size());
     system_.pack(state_.data());
-    for (auto& [aname, values] : ck.arrays) {
-      if (stateLaidOut(aname)) values = ownedPart(ck, values);
-      else if (const int cols = particleLaidOut(aname)) values = byId(ck, values, cols);
-    }
+    takeLocalParts(ck);
     ck.state.clear();
     return std::move(src.checkpoint);
   }

@@ -267,7 +267,7 @@ void SphSystem<D>::evaluateWith(const PhaseLists& lists, RhsPart part, double t,
   // A distributed run: the ghosts take their owners' state (docs/architecture.md "Distributed
   // runs"); after each phase below that writes values a later one reads from neighbours, the
   // ghosts take those too.
-  if (distribution) distribution->refreshState(particles, evolving_);
+  refreshGhosts();
   placeFixed(t);  // moving walls at time t (before the list sees the positions)
   if (neighbours.update(particles)) driver.prepare(neighbours);
 
@@ -338,7 +338,7 @@ bool SphSystem<D>::implicitVelocityOperator(double t, const double* y, CsrMatrix
       if (e->couplesVelocities()) coupling.push_back(e);
   if (coupling.empty()) return false;
   unpack(y);
-  if (distribution) distribution->refreshState(particles, evolving_);
+  refreshGhosts();
   placeFixed(t);
   if (neighbours.update(particles)) driver.prepare(neighbours);
   // The rows of the state's particles. In a run across processes the couplings to ghosts are
@@ -357,12 +357,10 @@ bool SphSystem<D>::implicitVelocityOperator(double t, const double* y, CsrMatrix
                          for (Effect<D>* e : coupling) e->velocityCoupling(ctx, i, moving, fixed, wall_dependence_, row);
                        });
   L.row_start.assign(n + 1, 0);
-  for (std::size_t i = 0; i < n; ++i)
-  {
+  for (std::size_t i = 0; i < n; ++i) {
     auto& entries = coupling_rows_[i].entries;
     if (distribution)
-      entries.erase(std::remove_if(entries.begin(), entries.end(), [n](const auto& e) { return static_cast<std::size_t>(e.first) >= n; }),
-                    entries.end());
+      std::erase_if(entries, [n](const auto& e) { return static_cast<std::size_t>(e.first) >= n; });
     L.row_start[i + 1] = L.row_start[i] + 1 + static_cast<int>(entries.size());
   }
   L.column.resize(static_cast<std::size_t>(L.row_start[n]));

@@ -94,6 +94,10 @@ class Checkpoints {
   // A per-particle array of the checkpoint (ck.id's order, `components` values each) for every
   // particle this process holds, its ghosts included, by id. Collective.
   std::vector<double> byId(const Checkpoint& ck, const std::vector<double>& values, int components) const;
+  // A distributed resume, once the particles are where they stay: the checkpoint's arrays laid
+  // out as the state (ownedPart) or per particle (byId) become this process's; the rest is the
+  // same on every process and stays as written. Collective.
+  void takeLocalParts(Checkpoint& ck) const;
   std::string arrayName(const Carrier& c, const std::string& name) const {
     return c.prefix.empty() ? name : c.prefix + "." + name;
   }
