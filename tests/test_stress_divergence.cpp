@@ -65,3 +65,78 @@ TEST_CASE("stress divergence: wall_stress is checked") {
   CHECK_THROWS_WITH_AS(worstForceBesideRod("mirrored", Mat<2>::Identity(), Mat<2>::Zero()),
                        doctest::Contains("extrapolated, continued"), InputError);
 }
+
+namespace {
+
+// The fluid annulus around the rod of the tests above, now with a sheared, turning velocity
+// field (the rod's particles carry it too) and the elastic stress S = eta_p (kappa + kappa^T) of
+// each fluid particle's own velocity gradient less its trace, eta_p (div v) I (the viscous stress
+// the split takes out: Oldroyd-B's stress in the limit Wi -> 0 but for that isotropic part). Returns
+// dv/dt of every fluid particle for the given effects (the Newtonian reference runs
+// [effects.viscosity] with mu = eta_p instead).
+std::vector<Vec<2>> forcesOfViscousStress(const std::string& effects, double mu) {
+  const double dx = 0.01, a = 4 * dx, R = 14 * dx, eta_p = 0.7;
+  Box<2> b(effects, dx, 1.6, KernelType::quintic, 2 * R, false);
+  b.viscosity = mu;
+  b.annulusAroundRod(a, R, [](const Vec<2>& x) {
+    return Vec<2>(-3.0 * x[1] + 40.0 * x[0] * x[1], 2.0 * x[0] + 25.0 * x[1] * x[1] - 10.0 * x[0] * x[0]);
+  });
+  b.finish();
+  if (Field* S = b.sys.particles.fields.find("elastic_stress")) {
+    b.evaluate();  // the velocity gradient of these velocities
+    const Field* kappa = b.sys.particles.fields.find("velocity_gradient");
+    REQUIRE(kappa != nullptr);
+    for (std::size_t i = 0; i < b.n(); ++i) {
+      const Eigen::Map<const Eigen::Matrix<double, 2, 2, Eigen::RowMajor>> k(kappa->data.data() + 4 * i);
+      const Mat<2> viscous = eta_p * (k + k.transpose() - k.trace() * Mat<2>::Identity());
+      packSymmetric<2>(viscous, S->data.data() + static_cast<std::size_t>(S->components) * i);
+    }
+  }
+  b.evaluate();
+  std::vector<Vec<2>> f(b.n());
+  for (std::size_t i = 0; i < b.n(); ++i) f[i] = b.dvdt(i);
+  return f;
+}
+
+std::string oldroydB(const std::string& stress_divergence) {
+  return "[effects.velocity_gradient]\n[effects.oldroyd_b]\nrelaxation_time = 0.1\npolymer_viscosity = 0.7\n"
+         "[effects.stress_divergence]\nwall_stress = \"continued\"\n" + stress_divergence;
+}
+
+}  // namespace
+
+TEST_CASE("stress divergence: both_sides_diffusion moves the viscous part of S to Morris' Laplacian") {
+  // With S = eta_p (kappa + kappa^T - tr(kappa) I) the split leaves S' = 0 on every fluid particle and, with the
+  // walls continued, on every wall neighbour: both_sides_diffusion = 1 must give exactly the
+  // Laplacian of viscosity eta_p (the viscous force's, walls presenting their velocity), on the
+  // rod's rings and at the free surface alike, where eq. 27 alone differs from it (the two
+  // discretisations part there: docs/theory.md §5.6). Half the split is the mean of the two.
+  const auto laplacian = forcesOfViscousStress("[effects.viscosity]\n", 0.7);
+  const auto eq27 = forcesOfViscousStress(oldroydB(""), 0.0);
+  const auto whole = forcesOfViscousStress(oldroydB("both_sides_diffusion = 1\n"), 0.0);
+  const auto half = forcesOfViscousStress(oldroydB("both_sides_diffusion = 0.5\n"), 0.0);
+  REQUIRE(laplacian.size() == whole.size());
+  double scale = 0, whole_error = 0, half_error = 0, forms_apart = 0;
+  for (std::size_t i = 0; i < laplacian.size(); ++i) scale = std::max(scale, laplacian[i].norm());
+  for (std::size_t i = 0; i < laplacian.size(); ++i) {
+    whole_error = std::max(whole_error, (whole[i] - laplacian[i]).norm() / scale);
+    half_error = std::max(half_error, (half[i] - 0.5 * (laplacian[i] + eq27[i])).norm() / scale);
+    forms_apart = std::max(forms_apart, (eq27[i] - laplacian[i]).norm() / scale);
+  }
+  MESSAGE("largest |dv/dt - reference| / max |Laplacian|: split 1 " << whole_error << ", split 0.5 " << half_error
+                                                                     << "; eq. 27 against the Laplacian " << forms_apart);
+  CHECK(whole_error < 1e-12);
+  CHECK(half_error < 1e-12);
+  CHECK(forms_apart > 0.05);
+}
+
+TEST_CASE("stress divergence: both_sides_diffusion is checked") {
+  CHECK_THROWS_WITH_AS(forcesOfViscousStress(oldroydB("both_sides_diffusion = -1\n"), 0.0), doctest::Contains("non-negative"),
+                       InputError);
+  // A stress without a polymer viscosity to split: the second-order fluid's.
+  CHECK_THROWS_WITH_AS(forcesOfViscousStress("[effects.velocity_gradient]\n[effects.viscosity]\n[effects.second_order_fluid]\n"
+                                             "alpha1 = -1e-3\nalpha2 = 1e-4\n[effects.stress_divergence]\n"
+                                             "both_sides_diffusion = 1\n",
+                                             0.7),
+                       doctest::Contains("rate-type model"), InputError);
+}

@@ -1,8 +1,13 @@
 # Rod climbing (docs/validation.md §20), the CI version: the scenes of cases/rod_climbing_*.toml
 # made small and short (container R = 4a instead of 8a, fluid 3.5a deep instead of 7a, the rod
 # at omega = 20 rad/s, 0.2 s: about 600 steps of 4755 particles each), a test of stability and
-# of the sign of the effect only: the Newtonian surface falls at the rod, an Oldroyd-B fluid
-# with 2 eta_p lambda > rho a^2/2 (lambda = 0.05 s, Wi = 1) climbs it.
+# of the sign of the effect only: the Newtonian surface falls at the rod (measured -0.060 dx), an
+# Oldroyd-B fluid with 2 eta_p lambda > rho a^2/2 (lambda = 0.05 s, Wi = 1) climbs it (+0.117 dx),
+# and one with 2 eta_p lambda < rho a^2/2 (lambda = 0.005 s, Wi = 0.1) still falls (-0.049 dx; the
+# theory: by 0.75 of the Newtonian fall). The last is what the case's both_sides_diffusion
+# mends: with the whole polymer viscosity through eq. 27 at this rod of 2 dx the Wi = 0.1 fluid
+# climbed (+0.102 dx) and the Wi = 1 climb was 1.8 times the theory's (+0.68 dx against +0.39);
+# with it every run here is 0.2-0.3 of its theory, the rod's resolution (validation.md §20).
 . "$(dirname "$0")/lib.sh"
 SMALL="--set domain.min=[-0.0055,-0.0015,-0.0055] --set domain.max=[0.0055,0.008,0.0055]
  --set blocks[0].outer_diameter=0.008 --set blocks[0].length=0.0035 --set blocks[0].centre=[0.0,0.00175,0.0]
@@ -14,24 +19,29 @@ expect 0 "ok: finished" -- "$VESPH" run "$SRC/cases/rod_climbing_newtonian.toml"
 # shellcheck disable=SC2086
 expect 0 "ok: finished" -- "$VESPH" run "$SRC/cases/rod_climbing_oldroyd_b.toml" -o "$WORK/ob" --quiet $SMALL \
   --set effects.oldroyd_b.relaxation_time=0.05
+# shellcheck disable=SC2086
+expect 0 "ok: finished" -- "$VESPH" run "$SRC/cases/rod_climbing_oldroyd_b.toml" -o "$WORK/ob01" --quiet $SMALL \
+  --set effects.oldroyd_b.relaxation_time=0.005
 # The rise at the rod (the first annulus' surface above the far band's, rod_climbing_check's
 # measure) in the last frame, and the run's sanity (mass, volume, speed, no void) in every frame.
 PYTHONPATH=$SRC/tools $PY - "$WORK/n/rod_climbing_newtonian.h5" "$WORK/ob/rod_climbing_oldroyd_b.h5" \
+  "$WORK/ob01/rod_climbing_oldroyd_b.h5" \
   >"$WORK/sign.log" 2>&1 <<'PYEOF' && pass || fail "sign of the effect: $(tail -5 "$WORK/sign.log")"
 import sys
 import numpy as np
 from vesph.checks.rod_climbing import measure_frame, setup
 from vesph.output import Output
 fields = ("kind", "position", "velocity", "mass", "density")
-for path, sign in zip(sys.argv[1:], (-1, 1)):
+# (the expected sign, the bound on the rise in dx): about half of each run's measured rise
+for path, (sign, bound) in zip(sys.argv[1:], ((-1, -0.02), (1, 0.05), (-1, -0.015))):
     with Output(path) as h5:
         p, dx = setup(h5.scene, h5.dx), h5.dx
         rows = [measure_frame(h5.read(k, fields), p, dx) for k in range(len(h5.frames))]
     rise = rows[-1]["rise"] / dx
     print(f"{p['model']}: rise at the rod {rise:+.4f} dx at t = {h5.frames[-1][1]:g} s "
-          f"(expected {'above +0.2' if sign > 0 else 'below -0.02'} dx); least interior filling "
+          f"(expected {'above' if sign > 0 else 'below'} {bound:+g} dx); least interior filling "
           f"{min(m['fill'] for m in rows):.3f}; largest speed {max(m['max_speed'] for m in rows) / (abs(p['omega']) * p['a']):.3f} omega a")
-    assert (rise > 0.2) if sign > 0 else (rise < -0.02), "wrong sign or too small"
+    assert (rise > bound) if sign > 0 else (rise < bound), "wrong sign or too small"
     assert min(m["fill"] for m in rows) > 0.7, "a void"
     assert max(m["max_speed"] for m in rows) < 2 * abs(p["omega"]) * p["a"], "too fast"
     assert abs(rows[-1]["mass"] / rows[0]["mass"] - 1) < 1e-12, "mass changed"

@@ -196,8 +196,10 @@ $SAME "$WORK/sof.serial/startup_channel_second_order_fluid.h5" "$out/startup_cha
 tail -1 "$out.log" | sed "s/^/second-order fluid resumed, 2 then 3 processes: /"
 # Per-particle wall treatments travel with the particles (each fixed particle's polar frame,
 # linear stress continuation and pressure floor as a field): the 2D Oldroyd-B rod Couette flow
-# (polar frames) on 3 processes, migrating walls and fluid.
-same rod2d "$SRC/cases/rod_couette_2d_oldroyd_b.toml" 3 --set time.end=0.1 --set 'output.times=[0.05,0.1]'
+# (polar frames) on 3 processes, migrating walls and fluid; with the stress divergence's
+# elastic-viscous split, whose eq. 27 reads the ghosts' velocity gradients.
+same rod2d "$SRC/cases/rod_couette_2d_oldroyd_b.toml" 3 --set time.end=0.1 --set 'output.times=[0.05,0.1]' \
+  --set 'blocks[1].frame="polar"' --set 'blocks[2].frame="polar"' --set effects.stress_divergence.both_sides_diffusion=1
 
 # What is not done across processes yet is refused before the run: the direct solvers of ISPH
 # (the pressure is solved by hypre across processes), image walls.

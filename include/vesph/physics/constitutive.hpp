@@ -81,7 +81,7 @@ constexpr bool hasOutOfPlaneStress() {
 // Base of the models that evolve an elastic stress S. Model supplies
 //   Mat<D> rate(const Mat<D>& kappa, const Mat<D>& S) const     dS/dt
 //     (for kOutOfPlaneStress models: also Mat<3> rate(const Mat<3>&, const Mat<3>&) in 2D)
-//   double polymerViscosity() const, double relaxationTime() const  (scales, stability:
+//   double polymerViscosity() const override, double relaxationTime() const  (scales, stability:
 //     modulus G = eta_p/lambda for the elastic wave speed)
 // and optionally
 //   double shortestRelaxationTime() const   the relaxation step limit's time (default lambda)

@@ -220,6 +220,9 @@ class Effect {
   // The scale of the stress an evolving model produces at velocity V over length L (Pa), for
   // default error-control tolerances; 0 when the effect evolves no stress.
   virtual double stressScale(double velocity, double length) const { return 0.0; }
+  // The polymer viscosity eta_p (Pa s) of an evolving rate-type model (its zero-shear value:
+  // XPP's eta_p), 0 for every other effect (the both-sides diffusion of the stress divergence).
+  virtual double polymerViscosity() const { return 0.0; }
 
   // Called once for every step the integrator accepts (never for rejected steps or stages),
   // for effects that carry information from one step to the next. The right-hand side stays

@@ -32,7 +32,7 @@ class OldroydB : public ConstitutiveEffect<D, OldroydB<D>> {
   Mat<D> rate(const K& kappa, const Mat<D>& S) const {
     return rate_.template operator()<D>(kappa, S);
   }
-  double polymerViscosity() const { return rate_.eta_p; }
+  double polymerViscosity() const override { return rate_.eta_p; }
   double relaxationTime() const { return rate_.lambda; }
   // The part of the rate linear in kappa and S, implicit under arkode-imex (ConstitutiveEffect).
   template <class K>

@@ -66,7 +66,7 @@ class Xpp final : public ConstitutiveEffect<D, Xpp<D>> {
   Mat<E> rate(const K& kappa, const Mat<E>& tau) const {
     return rate_.template operator()<E>(kappa, tau);
   }
-  double polymerViscosity() const { return rate_.G * rate_.lambda_b; }
+  double polymerViscosity() const override { return rate_.G * rate_.lambda_b; }
   double relaxationTime() const { return rate_.lambda_b; }
   // The trace of tau relaxes with lambda_0s in the linear limit (and faster, with
   // lambda_s = lambda_0s e^{-nu (Lambda - 1)}, once the backbone is stretched).
