@@ -39,6 +39,7 @@
 #include <algorithm>
 
 #include "vesph/physics/constitutive.hpp"
+#include "vesph/physics/morris_laplacian.hpp"
 #include "vesph/physics/registry.hpp"
 
 namespace vesph {
@@ -120,19 +121,7 @@ class StressDivergence final : public PairEffect<D, StressDivergence<D, Split>> 
   void velocityCoupling(const RhsContext<D>& ctx, Index i, std::span<const Neighbour<D>> moving,
                         std::span<const Neighbour<D>> fixed, std::span<const double> wall_dependence,
                         VelocityCouplingRow& row) const override {
-    const ParticleSet<D>& p = ctx.particles;
-    const double two_eta_over_rhoi = 2.0 * eta_a_ / p.density[i];
-    double diagonal = 0;
-    for (const Neighbour<D>& nb : moving) {
-      const double w = p.mass[nb.j] * two_eta_over_rhoi / p.density[nb.j] * nb.F;
-      diagonal += w;
-      row.entries.emplace_back(nb.j, -w);
-    }
-    const std::size_t fixed0 = p.n_moving;
-    for (const Neighbour<D>& nb : fixed)
-      diagonal += p.mass[nb.j] * two_eta_over_rhoi / p.density[nb.j] * nb.F *
-                  (wall_velocity_ ? 1.0 - wall_dependence[nb.j - fixed0] : 1.0);
-    row.diagonal += diagonal;
+    morris::addCouplingRow<D>(ctx.particles, i, eta_a_, moving, fixed, wall_dependence, wall_velocity_ != nullptr, row);
   }
 
   struct Local {
@@ -179,7 +168,7 @@ class StressDivergence final : public PairEffect<D, StressDivergence<D, Split>> 
     Mat<D> Sj = load(l.S, nb.j);
     if constexpr (Split) {
       const SplitOf<D>& sp = l.split;
-      const double w = l.m[nb.j] * sp.two_eta_over_rhoi * inv_rho * nb.F;
+      const double w = morris::weight(l.m[nb.j], sp.two_eta_over_rhoi, l.rho[nb.j], nb.F);
       for (int a = 0; a < D; ++a) l.acc[a] += w * (sp.vi[a] - sp.v[D * nb.j + a]);
       if (!sp.kappa) return;  // the Jacobian's diagonal: the Laplacian's only
       Sj -= viscous(nb.j);
@@ -190,7 +179,7 @@ class StressDivergence final : public PairEffect<D, StressDivergence<D, Split>> 
     const double inv_rho = 1.0 / l.rho[nb.j];
     if constexpr (Split) {
       const SplitOf<D>& sp = l.split;
-      const double w = l.m[nb.j] * sp.two_eta_over_rhoi * inv_rho * nb.F;
+      const double w = morris::weight(l.m[nb.j], sp.two_eta_over_rhoi, l.rho[nb.j], nb.F);
       for (int a = 0; a < D; ++a) l.acc[a] += w * (sp.vi[a] - sp.fixed_velocity[D * (nb.j - sp.fixed0) + a]);
       if (!sp.kappa) return;
     }

@@ -45,6 +45,7 @@
 #include <string>
 
 #include "vesph/physics/constitutive.hpp"  // Mat<D>
+#include "vesph/physics/morris_laplacian.hpp"
 #include "vesph/physics/registry.hpp"
 
 namespace vesph {
@@ -116,7 +117,8 @@ class Viscosity final : public PairEffect<D, Viscosity<D, StressForm>> {
   ImplicitPart implicitPart() const override { return ImplicitPart::all; }
   bool implicitReadsVelocityGradient() const override { return StressForm; }
 
-  // d(dv_i/dt)/dv_j = -w_ij for a fluid neighbour j, and the diagonal sum_j w_ij. A wall
+  // d(dv_i/dt)/dv_j = -w_ij for a fluid neighbour j, and the diagonal sum_j w_ij
+  // (morris::addCouplingRow). A wall
   // neighbour b's velocity is extrapolated from the fluid's, v_b = ... + sum_f c_bf v_f (the
   // no-slip mirror: c_bf = -W_bf / sum W), so its term w_ib (v_i - v_b) adds -w_ib c_bf to
   // every such f's column. Those entries are lumped onto the diagonal, w_ib (1 - sum_f c_bf)
@@ -131,18 +133,7 @@ class Viscosity final : public PairEffect<D, Viscosity<D, StressForm>> {
   void velocityCoupling(const RhsContext<D>& ctx, Index i, std::span<const Neighbour<D>> moving,
                         std::span<const Neighbour<D>> fixed, std::span<const double> wall_dependence,
                         VelocityCouplingRow& row) const override {
-    const ParticleSet<D>& p = ctx.particles;
-    const Local l{Vec<D>::Zero(), Vec<D>::Zero(), 2.0 * mu_ / p.density[i], nullptr, p.density.data(), p.mass.data(), nullptr, 0, {}};
-    double diagonal = 0;
-    for (const Neighbour<D>& nb : moving) {
-      const double w = weight(nb, l);
-      diagonal += w;
-      row.entries.emplace_back(nb.j, -w);
-    }
-    const std::size_t fixed0 = p.n_moving;
-    for (const Neighbour<D>& nb : fixed)
-      diagonal += weight(nb, l) * (wall_velocity_ ? 1.0 - wall_dependence[nb.j - fixed0] : 1.0);
-    row.diagonal += diagonal;
+    morris::addCouplingRow<D>(ctx.particles, i, mu_, moving, fixed, wall_dependence, wall_velocity_ != nullptr, row);
   }
 
   // Array pointers live in the accumulator so that the pair loop keeps them in registers.
@@ -223,7 +214,7 @@ class Viscosity final : public PairEffect<D, Viscosity<D, StressForm>> {
 
  private:
   double weight(const Neighbour<D>& nb, const Local& l) const {
-    return l.m[nb.j] * l.two_mu_over_rhoi / l.rho[nb.j] * nb.F;
+    return morris::weight(l.m[nb.j], l.two_mu_over_rhoi, l.rho[nb.j], nb.F);
   }
   // mu kappa^T of particle j (kappa^{ab} = dv^a/dx^b, stored row-major: its transpose is the
   // same numbers read column-major).
