@@ -237,6 +237,7 @@ void SphSystem<D>::PhaseLists::add(Effect<D>* e) {
     case Phase::forces: forces.push_back(e); break;
     case Phase::external: external.push_back(e); break;
   }
+  if (Effect<D>* part = e->gradientsPart()) gradients.push_back(part);
 }
 
 template <int D>

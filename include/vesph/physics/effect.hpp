@@ -264,6 +264,14 @@ class Effect {
   virtual void interactAgain(const RhsContext<D>& ctx, Index i, std::span<const Neighbour<D>> moving,
                              std::span<const Neighbour<D>> fixed) const {}
 
+  // A forces-phase effect that also needs a neighbour sum of its own before its pair term (the
+  // density diffusion's renormalised density gradient, form = "antuono", which the pair term
+  // reads at every neighbour j) returns that sum here: a gradients-phase pair effect that it
+  // owns and sets up itself. The system runs it in the gradients pass, after which a run across
+  // processes refreshes the fields on the ghosts, so the forces pass reads every neighbour's
+  // value. nullptr (the default): no such pass.
+  virtual Effect<D>* gradientsPart() { return nullptr; }
+
   // Per-particle effects: moving particles [begin, end).
   virtual void particles(const RhsContext<D>& ctx, std::size_t begin, std::size_t end) const {}
   // Pair effects: particle i with its moving and fixed neighbours (within the support).
