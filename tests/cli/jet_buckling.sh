@@ -4,11 +4,12 @@
 #   - the run finishes without a blow-up (the density stays within 10 % of rho0);
 #   - the jet buckles, as Cruickshank & Munson's criterion says it must (Re < 1.2, H/D > 7.2):
 #     jet_buckling_measure --expect-buckling, the frames after the initial column's landing
-#     (--from 0.1 s = 1.25 H/U); measured onset t = 0.21 s, largest indicator 0.53 D;
-#   - no void wider than 3 dx inside the fluid while the jet is a column (to t = 0.2 s; the run's
-#     largest 2.7 dx). After the onset, at this resolution (4 particles across the jet), the
-#     sheets the folding jet lays on the pile enclose gaps of up to 3.5 dx (at the case's 8 dx
-#     3.4 dx; docs/validation.md §19, not met): printed, not asserted.
+#     (--from 0.1 s = 1.25 H/U); measured onset t = 0.18 s, largest indicator 0.545 D;
+#   - no void wider than 3 dx inside the fluid over the whole run (measured: 2.53 dx to
+#     t = 0.2 s, while the jet is a column, 2.74 dx after, where the folding jet lays sheets on
+#     the pile). Before session 18 the case's delta-SPH diffusion (Molteni's form) and the plate
+#     left out of the stress form's kappa^T sum let those sheets enclose gaps of 3.52 dx
+#     (docs/validation.md §19).
 # The no-buckling side (H/D = 4, Re = 10) is in validation.md §19, not here (a minute each).
 # About 100 s of CPU time single-threaded (the run and the measure's void grid). The viscous
 # step coefficient stays at the default 0.125 here (the D = 4 dx jets run to 0.3 s with it; the
@@ -37,7 +38,7 @@ column = [float(r["void_gap_over_dx"]) for r in rows if float(r["time_s"]) <= 0.
 after = [float(r["void_gap_over_dx"]) for r in rows if float(r["time_s"]) > 0.2 + 1e-9]
 print(f"void gap to t = 0.2 s: {max(column):.2f} dx ({len(column)} frames); after: "
       f"{max(after) if after else float('nan'):.2f} dx ({len(after)} frames)")
-assert len(column) >= 20 and max(column) <= 3.0
+assert len(column) >= 20 and len(after) >= 9 and max(column + after) <= 3.0
 PYEOF
 cat "$WORK/voids.log"
 finish
