@@ -199,7 +199,6 @@ class DensityDiffusion final : public PairEffect<D, DensityDiffusion<D, Antuono>
   DensityGradient<D> gradient_pass_;
 };
 
-
 }  // namespace
 
 template <int D>

@@ -19,7 +19,7 @@ namespace vesph {
   X(xpp, makeXpp, "single-equation eXtended Pom-Pom, Verbeeten et al. 2001 (backbone_relaxation_time, modulus, arms, ...)") \
   X(artificial_viscosity, makeArtificialViscosity, "Monaghan artificial viscosity, Fang et al. eqs. (30)-(37) (alpha, beta)") \
   X(xsph, makeXsph, "XSPH particle movement, thesis 3.6 (epsilon, form)")                         \
-  X(density_diffusion, makeDensityDiffusion, "delta-SPH density diffusion, Molteni & Colagrossi 2009 (delta, hydrostatic, walls)") \
+  X(density_diffusion, makeDensityDiffusion, "delta-SPH density diffusion, Molteni & Colagrossi 2009 or Antuono et al. 2010 (delta, hydrostatic, walls, form)") \
   X(artificial_stress, makeArtificialStress, "artificial stress against the tensile instability, Fang et al. eqs. (38)-(44) (epsilon, exponent)") \
   X(particle_shifting, makeParticleShifting, "Fickian particle shifting as a velocity, Lind et al. 2012, Skillen et al. 2013 (coefficient, speed)") \
   X(free_surface, makeFreeSurface, "free-surface particles: number density n_i <= threshold n_ref (thesis §4.2) or Marrone et al. 2010 (method = \"marrone\")") \
