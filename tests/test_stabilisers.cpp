@@ -599,6 +599,16 @@ double drhodt(const Box<D>& b, std::size_t i) {
   return b.ydot[b.n() * D + i];
 }
 
+// Density rho(x) on every particle with the masses rho_i dx^2: uniform volumes, so that the
+// pair sums are linear in the density field.
+template <class Fn>
+void setDensityField(Box<2>& b, double dx, Fn&& rho) {
+  for (std::size_t i = 0; i < b.sys.particles.size(); ++i) {
+    b.sys.particles.density[i] = rho(Vec<2>(b.sys.particles.x(i)));
+    b.sys.particles.mass[i] = b.sys.particles.density[i] * dx * dx;
+  }
+}
+
 }  // namespace
 
 TEST_CASE("density diffusion: one pair against the formula; zero for a uniform density; a bump is smoothed") {
@@ -707,11 +717,7 @@ TEST_CASE("density diffusion: linear field zero in the interior, hydrostatic fie
                  "\n[effects.body_force]\nacceleration = [0.0, -9.81]\n",
              dx, 1.5, KernelType::cubic, 1.0, false);
     b.lattice(n, [](const Vec<2>&) { return Vec<2>::Zero(); });
-    // masses rho_i dx^2: uniform volumes, so that the pair sum is linear in the density field
-    for (std::size_t i = 0; i < b.sys.particles.size(); ++i) {
-      b.sys.particles.density[i] = hydrostatic(b.sys.particles.x(i));
-      b.sys.particles.mass[i] = b.sys.particles.density[i] * dx * dx;
-    }
+    setDensityField(b, dx, hydrostatic);
     b.finish();
     b.evaluate();
     // scale: the rate at the top row without the correction, ~ delta h c |grad rho| / h
@@ -747,10 +753,7 @@ TEST_CASE("density diffusion: linear field zero in the interior, hydrostatic fie
   q.lattice(n, [](const Vec<2>&) { return Vec<2>::Zero(); });
   const double a = 5.0;  // 1/m^2: rho varies by a (0.1 m)^2 = 5 %
   const Vec<2> centre = Vec<2>::Constant(0.5 * n * dx);
-  for (std::size_t i = 0; i < q.sys.particles.size(); ++i) {
-    q.sys.particles.density[i] = kRho0 * (1.0 + a * (Vec<2>(q.sys.particles.x(i)) - centre).squaredNorm());
-    q.sys.particles.mass[i] = q.sys.particles.density[i] * dx * dx;
-  }
+  setDensityField(q, dx, [&](const Vec<2>& x) { return kRho0 * (1.0 + a * (x - centre).squaredNorm()); });
   q.finish();
   q.evaluate();
   const double expect = 0.1 * q.sys.kernel.h * kSound * 4.0 * kRho0 * a;
@@ -777,10 +780,7 @@ TEST_CASE("density diffusion, form antuono: zero for linear densities on truncat
     CAPTURE(form);
     Box<2> b("[effects.density_diffusion]\nform = \"" + form + "\"\n", dx, 1.5, KernelType::cubic, 1.0, false);
     b.lattice(n, [](const Vec<2>&) { return Vec<2>::Zero(); });
-    for (std::size_t i = 0; i < b.sys.particles.size(); ++i) {
-      b.sys.particles.density[i] = linear(b.sys.particles.x(i));
-      b.sys.particles.mass[i] = b.sys.particles.density[i] * dx * dx;
-    }
+    setDensityField(b, dx, linear);
     b.finish();
     b.evaluate();
     double worst = 0;
@@ -807,10 +807,7 @@ TEST_CASE("density diffusion, form antuono: zero for linear densities on truncat
   const Vec<2> centre = Vec<2>::Constant(0.5 * n * dx);
   Box<2> q("[effects.density_diffusion]\nform = \"antuono\"\n", dx, 1.5, KernelType::cubic, 1.0, false);
   q.lattice(n, [](const Vec<2>&) { return Vec<2>::Zero(); });
-  for (std::size_t i = 0; i < q.sys.particles.size(); ++i) {
-    q.sys.particles.density[i] = kRho0 * (1.0 + a * (Vec<2>(q.sys.particles.x(i)) - centre).squaredNorm());
-    q.sys.particles.mass[i] = q.sys.particles.density[i] * dx * dx;
-  }
+  setDensityField(q, dx, [&](const Vec<2>& x) { return kRho0 * (1.0 + a * (x - centre).squaredNorm()); });
   q.finish();
   q.evaluate();
   const double molteni_bulk = 0.1 * q.sys.kernel.h * kSound * 4.0 * kRho0 * a;
