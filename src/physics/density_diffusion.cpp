@@ -74,6 +74,13 @@
 namespace vesph {
 namespace {
 
+// (rho_j - rho_i) - (rho^H_j - rho^H_i) = rho_j - rho_i + rho0 g . r_ij / c^2, the pair's difference
+// of the dynamic density (hydrostatic_gradient = rho0 g / c^2, zero without the correction).
+template <int D>
+double dynamicDifference(double rhoj, double rhoi, const Vec<D>& hydrostatic_gradient, const Vec<D>& rij) {
+  return rhoj - rhoi + hydrostatic_gradient.dot(rij);
+}
+
 // The renormalised gradient of the dynamic density, the gradients pass of the "antuono" form
 // (owned and set up by DensityDiffusion<D, true>).
 template <int D>
@@ -100,7 +107,7 @@ class DensityGradient final : public PairEffect<D, DensityGradient<D>> {
   }
   void pair(const RhsContext<D>&, Index, const Neighbour<D>& nb, Local& l) const {
     const double w = l.m[nb.j] / l.rho[nb.j] * nb.F;
-    l.g += (w * (l.rho[nb.j] - l.rhoi + hydrostatic_gradient_.dot(nb.rij))) * nb.rij;
+    l.g += (w * dynamicDifference<D>(l.rho[nb.j], l.rhoi, hydrostatic_gradient_, nb.rij)) * nb.rij;
     l.M.noalias() -= w * nb.rij * nb.rij.transpose();
   }
   void pairFixed(const RhsContext<D>& ctx, Index i, const Neighbour<D>& nb, Local& l) const {
@@ -175,17 +182,10 @@ class DensityDiffusion final : public PairEffect<D, DensityDiffusion<D, Antuono>
     }
   }
   void pair(const RhsContext<D>&, Index, const Neighbour<D>& nb, Local& l) const {
-    const double rhoj = l.rho[nb.j];
-    double difference = 2.0 * (rhoj - l.rhoi + hydrostatic_gradient_.dot(nb.rij));
-    if constexpr (Antuono) difference += (l.gi + Eigen::Map<const Vec<D>>(l.grad + D * nb.j)).dot(nb.rij);
-    l.acc -= difference * nb.F * l.m[nb.j] / rhoj;
+    add(l, nb, Antuono ? l.grad + D * nb.j : nullptr);
   }
   void pairFixed(const RhsContext<D>&, Index, const Neighbour<D>& nb, Local& l) const {
-    if (!include_walls_) return;
-    const double rhoj = l.rho[nb.j];
-    double difference = 2.0 * (rhoj - l.rhoi + hydrostatic_gradient_.dot(nb.rij));
-    if constexpr (Antuono) difference += 2.0 * l.gi.dot(nb.rij);  // a wall particle has no gradient: g_j = g_i
-    l.acc -= difference * nb.F * l.m[nb.j] / rhoj;
+    if (include_walls_) add(l, nb, l.gi.data());  // a wall particle has no gradient: g_j = g_i
   }
   void end(const RhsContext<D>& ctx, Index i, Local& l) const { ctx.drhodt[i] += coefficient_ * l.acc; }
 
@@ -197,6 +197,14 @@ class DensityDiffusion final : public PairEffect<D, DensityDiffusion<D, Antuono>
   Vec<D> hydrostatic_gradient_ = Vec<D>::Zero();
   Field* gradient_ = nullptr;
   DensityGradient<D> gradient_pass_;
+
+  // Neighbour j's term; gj: its density gradient (antuono only).
+  void add(Local& l, const Neighbour<D>& nb, const double* gj) const {
+    const double rhoj = l.rho[nb.j];
+    double difference = 2.0 * dynamicDifference<D>(rhoj, l.rhoi, hydrostatic_gradient_, nb.rij);
+    if constexpr (Antuono) difference += (l.gi + Eigen::Map<const Vec<D>>(gj)).dot(nb.rij);
+    l.acc -= difference * nb.F * l.m[nb.j] / rhoj;
+  }
 };
 
 }  // namespace
