@@ -94,8 +94,8 @@ def jet(pile, band_offset, hole=False, mound_offset=(0.0, 0.0)):
 
 
 def write_jet(path, frames, name="jet_synth", dim=3, radius=True, nozzle=True):
-    """frames: list of (time [s], fluid positions [n, 3]); the plate: one row of wall
-    particles at y = -dx/2."""
+    """frames: list of (time [s], fluid positions [n, 3]) or (time, positions, fluid ids [n]:
+    default 0 .. n-1); the plate: one row of wall particles at y = -dx/2 (ids from 10^6)."""
     wx = (np.arange(-16, 16) + 0.5) * DX
     X, Z = np.meshgrid(wx, wx)
     wall = np.column_stack([X.ravel(), np.full(X.size, -0.5 * DX), Z.ravel()])
@@ -105,15 +105,16 @@ def write_jet(path, frames, name="jet_synth", dim=3, radius=True, nozzle=True):
         f.attrs["dim"] = np.int64(dim)
         f.attrs["scene"] = SCENE.format(name=name, dim=dim, inflow=inflow)
         f.attrs["dx"] = np.float64(DX)
-        for i, (t, fl) in enumerate(frames):
+        for i, (t, fl, *ids) in enumerate(frames):
             n, nw = len(fl), len(wall)
+            fluid_ids = np.asarray(ids[0], dtype=np.uint64) if ids else np.arange(n, dtype=np.uint64)
             g = f.create_group(f"frames/{i:06d}")
             g.attrs["time"] = np.float64(t)
             g.attrs["step"] = np.int64(10 * i)
             g.create_dataset("position", data=np.vstack([fl, wall]))
             g.create_dataset("velocity", data=np.zeros((n + nw, 3)))
             g.create_dataset("kind", data=np.concatenate([np.zeros(n, np.uint8), np.ones(nw, np.uint8)]))
-            g.create_dataset("id", data=np.arange(n + nw, dtype=np.uint64))
+            g.create_dataset("id", data=np.concatenate([fluid_ids, 10 ** 6 + np.arange(nw, dtype=np.uint64)]))
             g.create_dataset("density", data=np.full(n + nw, RHO))
             g.create_dataset("mass", data=np.full(n + nw, RHO * DX ** 3))
     return path
@@ -254,6 +255,61 @@ def make_jet_tests(tmp):
         rows = rows_of(os.path.join(tmp, "jet_synth_jet.csv"))
         expect(float(rows[0]["void_gap_over_dx"]) >= 3.0, f"void gap {rows[0]['void_gap_over_dx']}")
 
+    def mound_with(remove):
+        """The jet on a mound 2 D high; remove(positions) -> bool mask of the particles taken
+        out. (all positions, ids of the kept ones, the kept positions)."""
+        full = jet(2 * D, (0.0, 0.0))
+        keep = ~remove(full)
+        ids = np.arange(len(full))
+        return full, ids[keep], full[keep]
+
+    def ball(c, r):
+        return lambda x: np.linalg.norm(x - np.asarray(c), axis=1) <= r
+
+    @t
+    def void_opened_in_the_fluid_is_a_rupture_and_keeps_its_origin():
+        full, ids, holed = mound_with(ball((0.0, D, 0.0), 2.0 * DX))
+        # the particles in another order in the last frame: the ids follow them
+        perm = np.random.default_rng(3).permutation(len(ids))
+        fr = [(0.0, full), (0.001, holed, ids), (0.002, holed[perm], ids[perm])]
+        h5 = write_jet(os.path.join(tmp, "opened.h5"), fr)
+        rc, out, err = measure(h5, "--out-dir", tmp, "--prefix", "opened", "--no-png",
+                               "--max-opened-gap", "2.5")
+        expect(rc == 1 and "CHECK FAILED: --max-opened-gap" in out, f"exit {rc}", out + err)
+        rows = rows_of(os.path.join(tmp, "opened_jet.csv"))
+        got = [(float(r["opened_void_gap_over_dx"]), float(r["enclosed_pocket_gap_over_dx"])) for r in rows]
+        expect(got[0] == (0.0, 0.0), f"the intact mound: {got[0]}")
+        for o, e in got[1:]:
+            expect(o >= 3.0 and e == 0.0, f"the hole: opened {o}, enclosed {e}", out)
+
+    @t
+    def pocket_closed_over_the_outside_is_enclosed_and_keeps_its_origin():
+        # a cavity off the jet's axis, open to the top of the mound through a shaft of radius
+        # 1.5 dx (open points: farther than 0.91 dx from every particle), then the shaft is filled
+        # by new particles (new ids) on the lattice: the cavity is a pocket the flow closed over
+        # the outside air
+        c = np.array([6.5 * DX, D - 3.0 * DX, 0.0])
+        cavity = ball(c, 2.0 * DX)
+        shaft = lambda x: (np.hypot(x[:, 0] - c[0], x[:, 2] - c[2]) <= 1.5 * DX) & (x[:, 1] >= c[1]) \
+            & (x[:, 1] <= 2 * D)  # noqa: E731
+        full, ids_open, open_top = mound_with(lambda x: cavity(x) | shaft(x))
+        _, ids_closed, closed = mound_with(cavity)
+        new = ~np.isin(ids_closed, ids_open)
+        ids_closed = np.where(new, ids_closed + 10 ** 5, ids_closed)
+        fr = [(0.0, open_top, ids_open), (0.001, closed, ids_closed), (0.002, closed, ids_closed)]
+        h5 = write_jet(os.path.join(tmp, "pocket.h5"), fr)
+        rc, out, err = measure(h5, "--out-dir", tmp, "--prefix", "pocket", "--no-png",
+                               "--max-opened-gap", "2.5")
+        expect(rc == 0 and "RESULT: PASS" in out, f"--max-opened-gap: exit {rc}", out + err)
+        rows = rows_of(os.path.join(tmp, "pocket_jet.csv"))
+        got = [(float(r["opened_void_gap_over_dx"]), float(r["enclosed_pocket_gap_over_dx"])) for r in rows]
+        expect(got[0] == (0.0, 0.0), f"the open cavity: {got[0]}", out)
+        for o, e in got[1:]:
+            expect(o == 0.0 and e >= 3.0, f"the pocket: opened {o}, enclosed {e}", out)
+        rc, out, err = measure(h5, "--out-dir", tmp, "--prefix", "pocket", "--no-png",
+                               "--max-void-gap", "2.5")
+        expect(rc == 1 and "CHECK FAILED: --max-void-gap" in out, f"--max-void-gap: exit {rc}", out + err)
+
     @t
     def errors_and_usage():
         fr = [(0.0, jet(0.0, (0.0, 0.0)))]
@@ -269,6 +325,8 @@ def make_jet_tests(tmp):
         for args, msg in ((("--expect-buckling", "--expect-no-buckling"), "not allowed with"),
                           (("--threshold", "0"), "--threshold must be a positive number"),
                           (("--max-void-gap", "2", "--no-voids"), "not with --no-voids"),
+                          (("--max-opened-gap", "2", "--no-voids"), "not with --no-voids"),
+                          (("--max-opened-gap", "-1"), "--max-opened-gap must be positive"),
                           (("--pictures", "soon"), "times")):
             rc, out, err = measure(h5, "--no-png", *args)
             expect(rc == 2 and msg in err, f"{args}: exit {rc}", err)

@@ -10,7 +10,7 @@ Usage
     tools/vesph-post jet_buckling_measure H5FILE [--out-dir DIR] [--prefix NAME] [--no-png]
         [--threshold 0.25] [--pile-factor 2] [--band 1] [--trace 1] [--plate Y]
         [--pictures T1,T2,...] [--no-voids]
-        [--expect-buckling | --expect-no-buckling] [--max-void-gap G]
+        [--expect-buckling | --expect-no-buckling] [--max-void-gap G] [--max-opened-gap G]
 
 The scene
 ---------
@@ -55,6 +55,14 @@ plane; its *offset* is the centroid's distance from the nozzle axis.
   of the largest empty sphere inside the fluid not open to the outside, / dx (the grid
   measure of drop_measure: an intact lattice gives at most 1.73, one missing particle 2;
   --no-voids skips it, it costs about a second a frame).
+- void origin (vesph.measure.void_origin): each void is followed from frame to frame through
+  the ids of the particles facing it. A void whose boundary particles faced the outside one
+  frame before is a pocket the flow *enclosed* over the surrounding air (a fold or a coil
+  laid on the pile: physical; at the free surface's pressure, as trapped air at ambient
+  pressure would be); one whose boundary particles were inside the fluid *opened* there (a
+  rupture: unphysical); a void that persists keeps its origin. Columns: the largest opened
+  void and the largest enclosed pocket / dx (0 when none); a void of the first frame counts
+  as opened.
 
 Over the run
 ------------
@@ -74,6 +82,8 @@ Checks (exit 1 when one fails)
 --expect-buckling     some frame buckles (the indicator exceeds --threshold);
 --expect-no-buckling  no frame buckles;
 --max-void-gap G      every frame's void gap is at most G dx (e.g. 2.5: no unphysical void).
+--max-opened-gap G    every frame's largest void opened inside the fluid is at most G dx (the
+                      pockets enclosed over the outside are left out).
 
 Outputs
 -------
@@ -158,19 +168,22 @@ class Jet(Output):
 
     def read_fluid(self, k):
         """(heights above the plate [n], lateral positions about the axis [n, 2], volumes
-        m/rho [n], positions [n, 3]) of the fluid particles of frame k; None for an unreadable
+        m/rho [n], positions [n, 3], ids [n]) of the fluid particles of frame k; None for an unreadable
         last frame of a run being written."""
-        d = self.read_or_skip(k, ("kind", "position", "mass", "density"))
+        d = self.read_or_skip(k, ("kind", "position", "mass", "density", "id"))
         if d is None:
             return None
         fl = d["kind"] == 0
         pos = d["position"][fl]
         height = (pos[:, self.axis] - self.plate) * -self.sign
         lat = pos[:, self.lateral] - self.centre
-        return height, lat, d["mass"][fl] / d["density"][fl], pos
+        return height, lat, d["mass"][fl] / d["density"][fl], pos, d["id"][fl]
 
 
 # -------------------------------------------------------------------------- measures
+VOID_LINK = 1.5   # the open radius' link (drop.open_radius): 0.91 dx in 3D
+
+
 def slab_profile(height, lat, vol, dx, H):
     """Per slab of thickness dx from the plate (0) to H: cross-section [m^2], lateral
     centroid [n_slabs, 2] (nan for an empty slab) and the slabs' lower edges."""
@@ -300,8 +313,10 @@ def oscillation(times, offsets, start):
 
 def measure(jet, a):
     """Rows (dicts) for the frames of the file."""
+    from vesph.measure import void_origin
     from vesph.measure.drop import grid_measures
 
+    voids = void_origin.VoidTracker(jet.dx, VOID_LINK)
     dx, D, U, R = jet.dx, jet.D, jet.U, jet.R
     jet_area = math.pi * R * R
     rows = []
@@ -316,7 +331,7 @@ def measure(jet, a):
         got = jet.read_fluid(k)
         if got is None:
             break
-        height, lat, vol, pos = got
+        height, lat, vol, pos, ids = got
         if len(height) == 0:
             raise ToolError(f"{jet.path}: frame {nm} has no fluid particles (kind 0)")
         if k in pick:
@@ -327,7 +342,13 @@ def measure(jet, a):
         whole = buckling_indicator(area, cen, edges, dx, jet_area)[0]
         band = band_offset(height, lat, vol, pile, min(pile + a.band * D, jet.H))
         nn, iso = isolation(pos, dx)
-        vg = grid_measures(pos, dx, 1.5, 3.0)["void_gap"] / dx if not a.no_voids else float("nan")
+        vg = opened = enclosed = float("nan")
+        if not a.no_voids:
+            gm = grid_measures(pos, dx, VOID_LINK, 3.0, cracks=False)
+            vg = gm["void_gap"] / dx
+            found = voids.frame(pos, ids, gm["open_grid"])
+            opened = void_origin.largest(found, void_origin.OPENED) / dx
+            enclosed = void_origin.largest(found, void_origin.ENCLOSED) / dx
         rows.append({
             "frame": nm, "time_s": t, "tU_D": t * U / D, "n_fluid": len(height),
             "volume": float(vol.sum()),
@@ -342,6 +363,7 @@ def measure(jet, a):
             "band_angle_deg": float(math.degrees(math.atan2(band[1], band[0])))
             if np.all(np.isfinite(band)) else float("nan"),
             "max_nn_gap_dx": nn, "isolated": iso, "void_gap_dx": vg,
+            "opened_gap_dx": opened, "enclosed_gap_dx": enclosed,
         })
     return rows
 
@@ -357,6 +379,7 @@ COLUMNS = [
     ("band_lateral_1_D", "band_offset_1_over_D"), ("band_lateral_2_D", "band_offset_2_over_D"),
     ("band_angle_deg", "band_angle_deg"), ("max_nn_gap_dx", "max_nn_gap_over_dx"),
     ("isolated", "isolated"), ("void_gap_dx", "void_gap_over_dx"),
+    ("opened_gap_dx", "opened_void_gap_over_dx"), ("enclosed_gap_dx", "enclosed_pocket_gap_over_dx"),
 ]
 
 
@@ -375,10 +398,11 @@ def summarise(jet, rows, a):
     s = {"onset_index": k0, "onset_s": float("nan"), "turns": 0.0,
          "coil_hz": float("nan"), "oscillation_hz": float("nan"),
          "max_indicator_D": float(np.max(ind[first:])),
-         "max_indicator_all_D": float(np.max(ind)), "max_void_gap_dx": float(np.nanmax(
-             [r["void_gap_dx"] for r in rows])) if not a.no_voids else float("nan"),
+         "max_indicator_all_D": float(np.max(ind)),
          "max_nn_gap_dx": float(np.nanmax([r["max_nn_gap_dx"] for r in rows])),
          "max_isolated": int(max(r["isolated"] for r in rows))}
+    for key in ("void_gap_dx", "opened_gap_dx", "enclosed_gap_dx"):
+        s["max_" + key] = float(np.nanmax([r[key] for r in rows])) if not a.no_voids else float("nan")
     if k0 is not None:
         s["onset_s"] = float(t[k0])
         s["turns"], s["coil_hz"] = coiling(t, [r["indicator_angle_deg"] for r in rows], k0)
@@ -421,7 +445,12 @@ def plot(png, jet, rows, s, a):
     axs[2].plot(t, col("pile_height_D"), "o-", ms=3)
     axs[2].set_ylabel("pile height / D")
     axs[3].plot(t, col("void_gap_dx"), "-", label="void gap")
+    axs[3].plot(t, col("opened_gap_dx"), "-", lw=0.8, label="void opened in the fluid")
+    axs[3].plot(t, col("enclosed_gap_dx"), "-", lw=0.8, label="pocket enclosed from outside")
     axs[3].plot(t, col("max_nn_gap_dx"), "--", label="max nearest-neighbour gap")
+    if a.max_opened_gap is not None:
+        axs[3].axhline(a.max_opened_gap, color="r", ls=":", lw=0.8,
+                       label=f"--max-opened-gap {a.max_opened_gap:g}")
     if a.max_void_gap is not None:
         axs[3].axhline(a.max_void_gap, color="k", ls=":", lw=0.8, label=f"--max-void-gap {a.max_void_gap:g}")
     axs[3].set_ylabel("gap / dx")
@@ -503,12 +532,13 @@ def run(a):
           f"(nu = solvent viscosity / density), {len(rows)} frames to t = {rows[-1]['time_s']:.4g} s "
           f"(t U/D = {rows[-1]['tU_D']:.3g})")
         p(f"  {'t [s]':>8s} {'tU/D':>7s} {'fluid':>7s} {'pile/D':>7s} {'ind/D':>7s} {'at h/D':>7s} "
-          f"{'band/D':>7s} {'angle':>7s} {'nn/dx':>6s} {'isol':>5s} {'void/dx':>7s}")
+          f"{'band/D':>7s} {'angle':>7s} {'nn/dx':>6s} {'isol':>5s} {'void/dx':>7s} {'opened':>7s} "
+          f"{'pocket':>7s}")
         for r in rows:
             p(f"  {r['time_s']:8.4f} {r['tU_D']:7.2f} {r['n_fluid']:7d} {r['pile_height_D']:7.2f} "
               f"{r['indicator_D']:7.3f} {r['indicator_height_D']:7.2f} {r['band_offset_D']:7.3f} "
               f"{r['indicator_angle_deg']:7.1f} {r['max_nn_gap_dx']:6.2f} {r['isolated']:5d} "
-              f"{r['void_gap_dx']:7.2f}")
+              f"{r['void_gap_dx']:7.2f} {r['opened_gap_dx']:7.2f} {r['enclosed_gap_dx']:7.2f}")
         U_D = jet.U / jet.D
         if a.start > 0:
             p(f"from t = {a.start:g} s (t U/D = {a.start * jet.U / jet.D:.3g}) on: largest buckling "
@@ -527,6 +557,10 @@ def run(a):
         void_gap = "not measured (--no-voids)" if a.no_voids else f"{fmt(s['max_void_gap_dx'])} dx"
         p(f"voids: largest void gap {void_gap}, largest nearest-neighbour "
           f"gap {fmt(s['max_nn_gap_dx'])} dx, at most {s['max_isolated']} isolated particles")
+        if not a.no_voids:
+            p(f"  of which: the largest void opened inside the fluid {fmt(s['max_opened_gap_dx'])} dx, "
+              f"the largest pocket enclosed from the outside {fmt(s['max_enclosed_gap_dx'])} dx "
+              f"(0: none)")
         for w in written:
             p(f"wrote {w}")
         ok = True
@@ -542,7 +576,12 @@ def run(a):
             p(f"CHECK FAILED: --max-void-gap: a void of {s['max_void_gap_dx']:.2f} dx > "
               f"{a.max_void_gap:g} dx")
             ok = False
-        if a.expect_buckling or a.expect_no_buckling or a.max_void_gap is not None:
+        if a.max_opened_gap is not None and s["max_opened_gap_dx"] > a.max_opened_gap:
+            p(f"CHECK FAILED: --max-opened-gap: a void opened inside the fluid of "
+              f"{s['max_opened_gap_dx']:.2f} dx > {a.max_opened_gap:g} dx")
+            ok = False
+        if (a.expect_buckling or a.expect_no_buckling or a.max_void_gap is not None
+                or a.max_opened_gap is not None):
             p("RESULT: " + ("PASS" if ok else "FAIL"))
         return 0 if ok else 1
 
@@ -585,6 +624,9 @@ def main(argv=None):
     g.add_argument("--expect-no-buckling", action="store_true", help="check: no frame buckles")
     ap.add_argument("--max-void-gap", type=float, metavar="G",
                     help="check: every frame's void gap is at most G dx (e.g. 2.5)")
+    ap.add_argument("--max-opened-gap", type=float, metavar="G",
+                    help="check: every void that opened inside the fluid (not a pocket the flow "
+                         "enclosed over the outside) is at most G dx in every frame")
     a = ap.parse_args(argv)
     if not (math.isfinite(a.start) and a.start >= 0):
         ap.error(f"--from must be a time >= 0 [s], got {a.start:g}")
@@ -596,6 +638,10 @@ def main(argv=None):
         ap.error(f"--max-void-gap must be positive, got {a.max_void_gap:g}")
     if a.max_void_gap is not None and a.no_voids:
         ap.error("--max-void-gap needs the void gap: not with --no-voids")
+    if a.max_opened_gap is not None and not (a.max_opened_gap > 0):
+        ap.error(f"--max-opened-gap must be positive, got {a.max_opened_gap:g}")
+    if a.max_opened_gap is not None and a.no_voids:
+        ap.error("--max-opened-gap needs the void measures: not with --no-voids")
     return vesph_output.run_reporting_errors(PROG, run, a)
 
 
