@@ -14,7 +14,8 @@ SMALL="--set domain.min=[-0.0055,-0.0015,-0.0055] --set domain.max=[0.0055,0.008
  --set blocks[0].outer_diameter=0.008 --set blocks[0].length=0.0035 --set blocks[0].centre=[0.0,0.00175,0.0]
  --set blocks[1].length=0.006 --set blocks[1].centre=[0.0,0.003,0.0] --set blocks[1].angular_velocity=[0.0,20.0,0.0]
  --set blocks[2].inner_diameter=0.008 --set blocks[2].outer_diameter=0.011 --set blocks[2].length=0.006
- --set blocks[2].centre=[0.0,0.003,0.0] --set blocks[3].diameter=0.011 --set time.end=0.2 --set output.interval=0.05"
+ --set blocks[2].centre=[0.0,0.003,0.0] --set blocks[3].diameter=0.011 --set time.end=0.2 --set output.interval=0.05
+ --set effects.equation_of_state.sound_speed.length=0.0035"
 # shellcheck disable=SC2086  # SMALL is a list of arguments
 expect 0 "ok: finished" -- "$VESPH" run "$SRC/cases/rod_climbing_newtonian.toml" -o "$WORK/n" --quiet $SMALL
 # shellcheck disable=SC2086
