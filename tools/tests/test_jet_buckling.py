@@ -266,18 +266,23 @@ def make_jet_tests(tmp):
     def ball(c, r):
         return lambda x: np.linalg.norm(x - np.asarray(c), axis=1) <= r
 
+    def origin_gaps(name, frames):
+        """Measure the frames with --max-opened-gap 2.5: (exit code, output, the file, per frame
+        (largest opened void, largest enclosed pocket) / dx)."""
+        h5 = write_jet(os.path.join(tmp, name + ".h5"), frames)
+        rc, out, err = measure(h5, "--out-dir", tmp, "--prefix", name, "--no-png", "--max-opened-gap", "2.5")
+        rows = rows_of(os.path.join(tmp, name + "_jet.csv"))
+        return rc, out + err, h5, [(float(r["opened_void_gap_over_dx"]),
+                                    float(r["enclosed_pocket_gap_over_dx"])) for r in rows]
+
     @t
     def void_opened_in_the_fluid_is_a_rupture_and_keeps_its_origin():
         full, ids, holed = mound_with(ball((0.0, D, 0.0), 2.0 * DX))
         # the particles in another order in the last frame: the ids follow them
         perm = np.random.default_rng(3).permutation(len(ids))
         fr = [(0.0, full), (0.001, holed, ids), (0.002, holed[perm], ids[perm])]
-        h5 = write_jet(os.path.join(tmp, "opened.h5"), fr)
-        rc, out, err = measure(h5, "--out-dir", tmp, "--prefix", "opened", "--no-png",
-                               "--max-opened-gap", "2.5")
-        expect(rc == 1 and "CHECK FAILED: --max-opened-gap" in out, f"exit {rc}", out + err)
-        rows = rows_of(os.path.join(tmp, "opened_jet.csv"))
-        got = [(float(r["opened_void_gap_over_dx"]), float(r["enclosed_pocket_gap_over_dx"])) for r in rows]
+        rc, out, _, got = origin_gaps("opened", fr)
+        expect(rc == 1 and "CHECK FAILED: --max-opened-gap" in out, f"exit {rc}", out)
         expect(got[0] == (0.0, 0.0), f"the intact mound: {got[0]}")
         for o, e in got[1:]:
             expect(o >= 3.0 and e == 0.0, f"the hole: opened {o}, enclosed {e}", out)
@@ -297,12 +302,8 @@ def make_jet_tests(tmp):
         new = ~np.isin(ids_closed, ids_open)
         ids_closed = np.where(new, ids_closed + 10 ** 5, ids_closed)
         fr = [(0.0, open_top, ids_open), (0.001, closed, ids_closed), (0.002, closed, ids_closed)]
-        h5 = write_jet(os.path.join(tmp, "pocket.h5"), fr)
-        rc, out, err = measure(h5, "--out-dir", tmp, "--prefix", "pocket", "--no-png",
-                               "--max-opened-gap", "2.5")
-        expect(rc == 0 and "RESULT: PASS" in out, f"--max-opened-gap: exit {rc}", out + err)
-        rows = rows_of(os.path.join(tmp, "pocket_jet.csv"))
-        got = [(float(r["opened_void_gap_over_dx"]), float(r["enclosed_pocket_gap_over_dx"])) for r in rows]
+        rc, out, h5, got = origin_gaps("pocket", fr)
+        expect(rc == 0 and "RESULT: PASS" in out, f"--max-opened-gap: exit {rc}", out)
         expect(got[0] == (0.0, 0.0), f"the open cavity: {got[0]}", out)
         for o, e in got[1:]:
             expect(o == 0.0 and e >= 3.0, f"the pocket: opened {o}, enclosed {e}", out)
