@@ -236,15 +236,50 @@ def open_radius(dim, link):
     return max(0.5 * link, 0.525 * math.sqrt(dim))
 
 
+def open_grid(pos, dx, link, pad_dx=2.0):
+    """The grid of the void gap (the module docstring), padded by pad_dx dx: dict with lo [dim],
+    s (grid spacing), shape, d (distance to the nearest particle per grid point), open (farther
+    than open_radius from every particle), outside (the open points connected to the border)
+    and r_open [m]. grid_measures and void_origin.VoidTracker share it."""
+    from scipy import ndimage
+    from scipy.spatial import cKDTree
+
+    dim = pos.shape[1]
+    pad = pad_dx * dx
+    lo = pos.min(axis=0) - pad
+    hi = pos.max(axis=0) + pad
+    s = 0.5 * dx
+    npts = np.prod(np.floor((hi - lo) / s) + 1)
+    if npts > MAX_GRID_POINTS:
+        s *= (npts / MAX_GRID_POINTS) ** (1.0 / dim)
+    axes = [lo[i] + s * np.arange(int(math.floor((hi[i] - lo[i]) / s)) + 1) for i in range(dim)]
+    shape = tuple(len(a) for a in axes)
+    grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, dim)
+    d, _ = cKDTree(pos).query(grid, k=1)
+    d = d.reshape(shape)
+    r_open = open_radius(dim, link) * dx
+    open_ = d > r_open
+    lab, _ = ndimage.label(open_)
+    border = np.zeros(shape, dtype=bool)
+    for ax in range(dim):
+        idx = [slice(None)] * dim
+        idx[ax] = 0
+        border[tuple(idx)] = True
+        idx[ax] = -1
+        border[tuple(idx)] = True
+    outside_labels = np.unique(lab[border & open_])
+    outside = np.isin(lab, outside_labels[outside_labels > 0])
+    return {"lo": lo, "s": s, "shape": shape, "d": d, "open": open_, "outside": outside,
+            "r_open": r_open}
+
+
 def grid_measures(pos, dx, link, crack_radius, cracks=True):
     """Void and crack measures on a grid (see the module docstring): dict with void_gap [m],
     void_area and crack_area [m^2, 3D: m^3], the grid spacing [m] and, per particle, the
     distance [m] from its grid point to the nearest open point (outside or void), and the
-    open grid (`void_origin.open_grid`). cracks=False leaves the crack area (nan) and the
+    open grid (`open_grid`). cracks=False leaves the crack area (nan) and the
     per-particle distance (None) out, the costly part; the grid is the same."""
     from scipy import ndimage
-
-    from vesph.measure.void_origin import open_grid
 
     g = open_grid(pos, dx, link, 2.0 + crack_radius)
     lo, s, shape, d, open_, outside = (g[k] for k in ("lo", "s", "shape", "d", "open", "outside"))
@@ -252,22 +287,23 @@ def grid_measures(pos, dx, link, crack_radius, cracks=True):
     inside = ~outside
     inner = d[inside]
     enclosed = int(np.count_nonzero(open_ & inside))
+    out = {"void_gap": 2.0 * float(inner.max()) if inner.size else 0.0,
+           "void_area": enclosed * s ** dim, "crack_area": float("nan"), "grid": s,
+           "particle_to_open": None, "open_grid": g}
+    if not cracks:
+        return out
     # closing of the inside by a ball of radius crack_radius dx (via distance transforms):
     # dilate (points within R of the inside), then erode (points farther than R from the
     # complement of the dilated set); what it adds are the narrow openings of the outside
-    if not cracks:
-        return {"void_gap": 2.0 * float(inner.max()) if inner.size else 0.0,
-                "void_area": enclosed * s ** dim, "crack_area": float("nan"), "grid": s,
-                "particle_to_open": None, "open_grid": g}
     R = crack_radius * dx
     dilated = ndimage.distance_transform_edt(outside, sampling=s) <= R
     closed = ndimage.distance_transform_edt(dilated, sampling=s) > R
     crack = int(np.count_nonzero(closed & outside))
     to_open = ndimage.distance_transform_edt(~open_, sampling=s)
     cell = np.clip(np.rint((pos - lo) / s).astype(int), 0, np.array(shape) - 1)
-    return {"void_gap": 2.0 * float(inner.max()) if inner.size else 0.0,
-            "void_area": enclosed * s ** dim, "crack_area": crack * s ** dim, "grid": s,
-            "particle_to_open": to_open[tuple(cell.T)], "open_grid": g}
+    out["crack_area"] = crack * s ** dim
+    out["particle_to_open"] = to_open[tuple(cell.T)]
+    return out
 
 
 def interior_density(drop, pos, pos_all, m_all, to_open, grid):

@@ -316,7 +316,7 @@ def measure(jet, a):
     from vesph.measure import void_origin
     from vesph.measure.drop import grid_measures
 
-    voids = void_origin.VoidTracker(jet.dx, VOID_LINK)
+    voids = void_origin.VoidTracker()
     dx, D, U, R = jet.dx, jet.D, jet.U, jet.R
     jet_area = math.pi * R * R
     rows = []

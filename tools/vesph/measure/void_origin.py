@@ -3,10 +3,10 @@ outside (a fold or a coil of a jet laying down on its pile encloses some of the 
 physical), or a void that opened inside the fluid (a rupture: the tensile instability, a
 particle disorder; unphysical). Followed from frame to frame through the particles' ids.
 
-The voids are those of `drop.grid_measures`: the distance d to the nearest fluid particle on a
-grid of spacing dx/2 over the fluid's bounding box padded by 2 dx; a grid point is *open* when
-d exceeds the open radius r_o (`drop.open_radius`: 0.91 dx in 3D for link 1.5, so an intact
-lattice has no open point); the open points connected to the box's border are the *outside*,
+The voids are those of `drop.grid_measures` on its grid `drop.open_grid`: the distance d to the
+nearest fluid particle on a grid of spacing dx/2 over the fluid's padded bounding box; a grid
+point is *open* when d exceeds the open radius r_o (`drop.open_radius`: 0.91 dx in 3D for link
+1.5, so an intact lattice has no open point); the open points connected to the box's border are the *outside*,
 each other connected set of open points (face neighbours) is a *void*, its gap 2 max d.
 
 A particle *faces* an open region when that region has a grid point within r_o + 2 s of the
@@ -26,70 +26,26 @@ evidence of an enclosure). The classification does not depend on the output inte
 as a pocket's boundary particles are still at the surface one frame before it closes: the
 surface particles that close a pocket were at the surface before, whatever the interval.
 """
-import math
-
 import numpy as np
-
-from vesph.measure.drop import MAX_GRID_POINTS, open_radius
 
 ENCLOSED = "enclosed"
 OPENED = "opened"
 
 
-def open_grid(pos, dx, link, pad_dx=2.0):
-    """The open grid of the fluid particles pos [n, dim] (see the module docstring): dict with
-    lo [dim], s (grid spacing), shape, d (distance to the nearest particle per grid point),
-    open, outside (bool arrays of the grid's shape) and r_open [m]."""
-    from scipy import ndimage
-    from scipy.spatial import cKDTree
-
-    dim = pos.shape[1]
-    pad = pad_dx * dx
-    lo = pos.min(axis=0) - pad
-    hi = pos.max(axis=0) + pad
-    s = 0.5 * dx
-    npts = np.prod(np.floor((hi - lo) / s) + 1)
-    if npts > MAX_GRID_POINTS:
-        s *= (npts / MAX_GRID_POINTS) ** (1.0 / dim)
-    axes = [lo[i] + s * np.arange(int(math.floor((hi[i] - lo[i]) / s)) + 1) for i in range(dim)]
-    shape = tuple(len(a) for a in axes)
-    grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, dim)
-    d, _ = cKDTree(pos).query(grid, k=1)
-    d = d.reshape(shape)
-    r_open = open_radius(dim, link) * dx
-    open_ = d > r_open
-    lab, _ = ndimage.label(open_)
-    border = np.zeros(shape, dtype=bool)
-    for ax in range(dim):
-        idx = [slice(None)] * dim
-        idx[ax] = 0
-        border[tuple(idx)] = True
-        idx[ax] = -1
-        border[tuple(idx)] = True
-    outside_labels = np.unique(lab[border & open_])
-    outside = np.isin(lab, outside_labels[outside_labels > 0])
-    return {"lo": lo, "s": s, "shape": shape, "d": d, "open": open_, "outside": outside,
-            "r_open": r_open}
-
-
 class VoidTracker:
     """Follows the voids of successive frames of one run (call `frame` in time order)."""
 
-    def __init__(self, dx, link=1.5):
-        self.dx = dx
-        self.link = link
+    def __init__(self):
         self.prev_ids = None        # sorted ids of the previous frame's particles
         self.prev_state = None      # per sorted id: -1 outside, 0 inside, v >= 1 the void it faced
         self.prev_origin = {}       # void label of the previous frame -> origin
 
-    def frame(self, pos, ids, grid=None):
+    def frame(self, pos, ids, g):
         """The voids of this frame: a list of dicts (gap [m], origin: "enclosed" or "opened",
-        persists: bool, centre [dim]: the void's deepest grid point, boundary: the number of
-        particles facing it), largest gap first. grid: this frame's `open_grid` of pos with
-        the tracker's dx and link, when computed already (`drop.grid_measures` returns it)."""
+        persists: bool, boundary: the number of particles facing it), largest gap first.
+        g: this frame's `drop.open_grid` of pos (`drop.grid_measures` returns it)."""
         from scipy import ndimage
 
-        g = grid if grid is not None else open_grid(pos, self.dx, self.link)
         s, lo, shape = g["s"], g["lo"], g["shape"]
         enclosed = g["open"] & ~g["outside"]
         lab, n = ndimage.label(enclosed)
@@ -108,14 +64,12 @@ class VoidTracker:
             state = np.where(faced > 0, faced, state)
             index = np.arange(1, n + 1)
             gaps = 2.0 * np.asarray(ndimage.maximum(g["d"], lab, index))
-            deepest = ndimage.maximum_position(g["d"], lab, index)
             origins = {}
-            for v, gap, at in zip(index, gaps, deepest):
+            for v, gap in zip(index, gaps):
                 members = ids[faced == v]
                 origin, persists = self._origin(members)
                 origins[int(v)] = origin
                 voids.append({"gap": float(gap), "origin": origin, "persists": persists,
-                              "centre": lo + s * np.asarray(at, dtype=float),
                               "boundary": int(members.size)})
             self.prev_origin = origins
         else:
