@@ -381,3 +381,51 @@ TEST_CASE("velocity gradient: form = \"renormalised\" is exact for a linear velo
   CHECK(standard > 1e-3);
   CHECK(renormalised < 1e-10);
 }
+
+TEST_CASE("dummy walls: slip = \"free\" reflects the fluid's velocity in the wall's plane; no slip mirrors it") {
+  // The Poiseuille channel (periodic in x, walls below y = 0 and above y = H) with its upper
+  // wall free-slip, the fluid given a uniform velocity (U, V): every wall particle that reaches
+  // the fluid has the fluid's centroid straight above or below it (periodic lattice), so its
+  // ghost velocity is exactly (U, -V) on the free-slip wall and (-U, -V) on the no-slip one.
+  SceneHeader h;
+  Config cfg = loadScene(VESPH_SOURCE_DIR "/cases/poiseuille_newtonian.toml", {"blocks[2].slip=\"free\""}, h);
+  Simulation<2> sim(cfg, h);
+  SphSystem<2>& sys = sim.system();
+  ParticleSet<2>& P = sys.particles;
+  const std::size_t n = P.n_moving;
+  const double U = 3e-5, V = -1e-6;
+  for (std::size_t i = 0; i < n; ++i) P.v(i) = Vec<2>(U, V);
+  std::vector<double> y(sim.state().size()), ydot(y.size());
+  sys.pack(y.data());
+  sys.evaluate(0.0, y.data(), ydot.data());
+  const Field* ghost = P.fields.find("wall_velocity");
+  REQUIRE(ghost != nullptr);
+  std::size_t upper = 0, lower = 0;
+  for (std::size_t w = n; w < P.size(); ++w) {
+    if (P.kind[w] != static_cast<std::uint8_t>(ParticleKind::wall)) continue;  // dummy: no fluid within reach
+    const Vec<2> g(ghost->data[2 * (w - n)], ghost->data[2 * (w - n) + 1]);
+    if (P.position[2 * w + 1] > 1e-3) {
+      ++upper;
+      CHECK(g[0] == doctest::Approx(U).epsilon(1e-12));
+      CHECK(g[1] == doctest::Approx(-V).epsilon(1e-9));
+    } else {
+      ++lower;
+      CHECK(g[0] == doctest::Approx(-U).epsilon(1e-12));
+      CHECK(g[1] == doctest::Approx(-V).epsilon(1e-9));
+    }
+  }
+  CHECK(upper > 0);
+  CHECK(lower == upper);
+}
+
+TEST_CASE("dummy walls: slip = \"free\" is refused with the second-order fluid's lagged acceleration") {
+  SceneHeader h;
+  Config cfg = loadScene(VESPH_SOURCE_DIR "/cases/startup_channel_second_order_fluid.toml",
+                         {"blocks[2].slip=\"free\"", "effects.second_order_fluid.material_derivative=\"lagged\"",
+                          "effects.second_order_fluid.alpha1=-1.0e-5"},  // |alpha1| small enough for the lagged form
+                         h);
+  Simulation<2> sim(cfg, h);
+  std::vector<double> y = sim.state(), ydot(y.size());
+  CHECK_THROWS_WITH_AS(sim.system().evaluate(0.0, y.data(), ydot.data()),
+                       doctest::Contains("slip = \"free\" is not implemented with the second-order fluid"), InputError);
+}

@@ -29,6 +29,7 @@ void DummyWalls<D>::setup(Setup<D>& s) {
   for (const WallPoint<D>& w : points_) {
     any_floor_ = any_floor_ || std::isfinite(w.pressure_floor);
     any_polar_ = any_polar_ || w.polar;
+    any_free_slip_ = any_free_slip_ || w.free_slip;
   }
   if (any_floor_ && !model_)
     throw InputError("blocks: pressure_floor bounds the wall pressure extrapolated from the equation of state; "
@@ -58,6 +59,7 @@ void DummyWalls<D>::fieldsAllocated(ParticleSet<D>&) {
       f[4 + a] = w.axis_point[a];
       f[4 + D + a] = w.axis[a];
     }
+    f[4 + 2 * D] = w.free_slip ? 1.0 : 0.0;
   }
 }
 
@@ -158,6 +160,13 @@ void DummyWalls<D>::update(const RhsContext<D>& ctx, const NeighbourList<D>& lis
         throw std::logic_error("image walls interpolate at most 8 fields of at most 8 components");
     // Fang: "the normal component of the elastic stress ... is set to zero" on the boundary
     // particles: the stress tensors (D (D + 1) / 2 components).
+    // The second-order fluid's wall ghost of the lagged acceleration is the no-slip one (-a~,
+    // vesph/physics/second_order_fluid.cpp), which a free-slip wall would contradict.
+    if (any_free_slip_)
+      for (const Field* f : interpolated_)
+        if (f->name == "lagged_acceleration")
+          throw InputError("blocks: slip = \"free\" is not implemented with the second-order fluid's lagged acceleration "
+                           "(its wall ghost is the no-slip one); use slip = \"no\"");
     for (Field* f : interpolated_)
       is_stress_.push_back((f->name == "elastic_stress" || f->name == "extra_stress") && f->components == (D == 2 ? 3 : 6));
   }
@@ -224,7 +233,18 @@ void DummyWalls<D>::update(const RhsContext<D>& ctx, const NeighbourList<D>& lis
       if (!inflow) sum_rho_gr += p.density[nb.j] * g_rel.dot(nb.rij) * nb.W;  // rij = r_w - r_f
     }
     if (sumW > 0) {
-      for (int a = 0; a < D; ++a) out_v[a] = inflow ? p.velocity[D * w + a] : 2.0 * p.velocity[D * w + a] - sum_v[a] / sumW;
+      if (any_free_slip_ && point->free_slip && !inflow) {
+        // Free slip (a wall at rest): v~ reflected in the plane normal to the direction of the
+        // fluid's centroid (dummy_walls.hpp); without a direction (the centroid on the wall
+        // particle) v~ itself.
+        const Vec<D> v_mean = sum_v / sumW;
+        const double reach = centroid.norm();
+        const Vec<D> n = reach > 1e-9 * sumW * dx_ ? Vec<D>(centroid / reach) : Vec<D>::Zero();
+        const Vec<D> ghost = v_mean - 2.0 * v_mean.dot(n) * n;
+        for (int a = 0; a < D; ++a) out_v[a] = ghost[a];
+      } else {
+        for (int a = 0; a < D; ++a) out_v[a] = inflow ? p.velocity[D * w + a] : 2.0 * p.velocity[D * w + a] - sum_v[a] / sumW;
+      }
       // A rotating wall: the mirror of the fluid's velocity relative to the rigid motion, whose
       // Shepard average over the fluid is u_w + Omega x (x~_f - x_w) (theory.md §6.2).
       if (spin_ && !inflow) {
@@ -266,7 +286,7 @@ void DummyWalls<D>::velocityDependence(const ParticleSet<D>& p, std::vector<doub
   for (std::size_t w = n0; w < p.size(); ++w) {
     if (any_image_ && points_[w - n0].image) continue;
     if (p.kind[w] == static_cast<std::uint8_t>(ParticleKind::inflow)) continue;
-    dependence[w - n0] = -1.0;
+    dependence[w - n0] = !points_.empty() && points_[w - n0].free_slip ? 1.0 : -1.0;
   }
 }
 
@@ -414,6 +434,8 @@ void DummyWalls<D>::resized(const ParticleRemap& remap) {
         w.axis_point[a] = f[4 + a];
         w.axis[a] = f[4 + D + a];
       }
+      w.free_slip = f[4 + 2 * D] > 0.5;
+      any_free_slip_ = any_free_slip_ || w.free_slip;
     }
     return;
   }

@@ -115,6 +115,7 @@ struct Block {
   double pressure_floor = -std::numeric_limits<double>::infinity();  // dummy wall, Pa
   bool polar = false;      // dummy wall of a round shape: averaged in its polar frame
   bool linear_stress = false;  // dummy wall: stresses continued linearly from the fluid
+  bool free_slip = false;  // dummy wall at rest: slip = "free" (no shear stress)
   bool hydrostatic = false;              // fluid: hydrostatic initial density
   std::optional<double> surface_height{};  // its free surface, m along -g (absent: the block's top)
 
@@ -159,7 +160,7 @@ class BlockReader {
     block.solid = readSolid(b, shape, true);
     if (kind == "wall") readWallTreatment(b, block, shape);
     else
-      for (const char* key : {"frame", "stress_extrapolation"})
+      for (const char* key : {"frame", "stress_extrapolation", "slip"})
         if (b.has(key)) b.fail(key, std::string("no ") + key + " on a fluid block (it sets how a wall takes the fluid's values)");
     else if (b.has("pressure_floor")) b.fail("pressure_floor", "no pressure_floor on a fluid block (it bounds a wall's pressure)");
     if (block.image && shape != "box")
@@ -243,6 +244,17 @@ class BlockReader {
       std::tie(block.normal_axis, block.normal_sign) = b.coordinateAxis<D>(
           "normal", "a coordinate unit vector pointing from the wall into the fluid, e.g. [0.0, 1.0] for a floor");
       block.centroid = b.choice("extrapolation", "fang", {"fang", "centroid"}) == "centroid";
+    }
+    if (b.has("slip")) {
+      // slip = "free": the ghost velocity reflects the fluid's in the wall's plane, a wall
+      // without shear stress (include/vesph/boundary/dummy_walls.hpp, docs/theory.md §6.4).
+      block.free_slip = b.choice("slip", "no", {"no", "free"}) == "free";
+      if (block.free_slip && block.image)
+        b.fail("slip", "\"no\" with treatment = \"image\" (Fang's eq. 47 extrapolates through the wall's own velocity; "
+                       "free slip is for dummy layers)");
+      for (const char* key : {"velocity", "angular_velocity", "ramp_time"})
+        if (block.free_slip && b.has(key))
+          b.fail("slip", std::string("\"no\" on a moving wall (") + key + "; free slip is for walls at rest)");
     }
     if (b.has("pressure_floor")) {
       // A wall that pushes but does not pull (at 0): theory.md §6, the die's lip in
@@ -547,6 +559,7 @@ class LatticePlacer {
       WallPoint<D> w;
       w.pressure_floor = b.pressure_floor;
       w.linear_stress = b.linear_stress;
+      w.free_slip = b.free_slip;
       if (b.polar) {
         w.polar = true;
         w.axis_point = b.solid.centre;
@@ -805,10 +818,11 @@ std::vector<WallPoint<D>> generateParticles(ConfigTable& root, const LatticeGeom
       summaries->push_back(s);
     }
   }
-  // Scenes without image walls, pressure floors, polar frames or linear stresses keep no per-wall-particle record
-  // (DummyWalls treats an empty one as all dummy layers without a floor).
-  if (std::none_of(wall_points.begin(), wall_points.end(),
-                   [](const WallPoint<D>& w) { return w.image || w.polar || w.linear_stress || std::isfinite(w.pressure_floor); }))
+  // Scenes without image walls, pressure floors, polar frames, linear stresses or free slip keep no per-wall-particle
+  // record (DummyWalls treats an empty one as all no-slip dummy layers without a floor).
+  if (std::none_of(wall_points.begin(), wall_points.end(), [](const WallPoint<D>& w) {
+        return w.image || w.polar || w.linear_stress || w.free_slip || std::isfinite(w.pressure_floor);
+      }))
     std::vector<WallPoint<D>>().swap(wall_points);
   return wall_points;
 }

@@ -58,6 +58,16 @@
 // The extrapolated velocity is the wall particle's ghost velocity (field wall_velocity, used by
 // the viscous and velocity-gradient terms); the continuity equation sees the wall's own
 // velocity, as for the dummy layers.
+//
+// Per dummy-layer wall block at rest with slip = "free": a wall without shear stress. The ghost
+// velocity is the reflection of the fluid's Shepard average v~ in the wall's plane,
+//   wall_velocity_w = v~ - 2 (v~ . n) n,   n = (x~_f - x_w)/|x~_f - x_w|,
+// x~_f the Shepard centroid of the fluid neighbours (the direction into the fluid, in the
+// polar frame where the block has one): the tangential velocity continues into the wall (no
+// velocity difference across it: no tangential viscous force), the normal one is mirrored (as
+// at a no-slip wall, holding the fluid off it with the pressure). It stands for a symmetry plane
+// (docs/theory.md §6.4): the floor of the rod-climbing container, under which the theory's fluid
+// is infinitely deep (docs/validation.md §20).
 #include <limits>
 #include <vector>
 
@@ -85,6 +95,9 @@ struct WallPoint {
   bool linear_stress = false;
   Vec<D> axis_point = Vec<D>::Zero();
   Vec<D> axis = Vec<D>::Zero();
+  // Dummy layers at rest, slip = "free": the ghost velocity is the fluid's reflected in the
+  // wall's plane (above) instead of its no-slip mirror.
+  bool free_slip = false;
 };
 
 template <int D>
@@ -101,7 +114,9 @@ class DummyWalls final : public Boundary<D> {
   void update(const RhsContext<D>& ctx, const NeighbourList<D>& list, PairDriver<D>& driver) override;
   void resized(const ParticleRemap& remap) override;
   // The no-slip mirror 2 u_w - (the fluid's Shepard average): -1; the boundary particles of
-  // image walls and inflow buffers carry prescribed velocities: 0.
+  // image walls and inflow buffers carry prescribed velocities: 0; a free-slip wall: +1 (its
+  // tangential components, which carry the shear, follow the fluid's; the mirrored normal one
+  // is left to the Krylov iterations).
   void velocityDependence(const ParticleSet<D>& particles, std::vector<double>& dependence) const override;
 
  private:
@@ -116,15 +131,17 @@ class DummyWalls final : public Boundary<D> {
   double rho0_ = 1, dx_ = 1;
   std::vector<WallPoint<D>> points_;
   // Without image walls, each fixed particle's treatment (polar frame, linear stress, pressure
-  // floor: kPointComponents values) is also a field, so that it travels with the particle in a
-  // run across processes: points_ is made again from it after the set changes (resized).
-  static constexpr int kPointComponents = 4 + 2 * D;
+  // floor, free slip: kPointComponents values) is also a field, so that it travels with the
+  // particle in a run across processes: points_ is made again from it after the set changes
+  // (resized).
+  static constexpr int kPointComponents = 5 + 2 * D;
   Field* point_field_ = nullptr;  // wall_point
   std::vector<Index> images_;     // the image particles (depth > 0), particle indices
   std::vector<char> is_stress_;   // per interpolated field: a stress tensor (n.S.n = 0 on the wall)
   bool any_image_ = false;
   bool any_floor_ = false;        // some wall particle has a finite pressure_floor
   bool any_polar_ = false;        // some wall particle averages in a polar frame
+  bool any_free_slip_ = false;    // some wall particle is free-slip
   bool ambient_inlet_ = false;
 
   // Fang eq. (46) for the flagged fields, in the wall point's polar frame and/or continued

@@ -36,6 +36,10 @@ attribute ``scene``:
     H    = max over those blocks of max[1]  -  y0                  [m]
     (walls with treatment = "image": y0 and y0 + H are their surfaces, the rows of
     boundary particles: the floor's max[1] and the ceiling's min[1])
+    (a wall with slip = "free" on one side, above the fluid or below it: the channel
+    is half of one of height 2 H whose middle is that wall, the free-slip wall a plane
+    of symmetry: y0 and H are those of the whole channel, the steady velocity at the
+    free-slip wall F (2H)^2/(8 nu))
 The analytic start-up velocity (fluid at rest at t = 0, no-slip walls at
 y = y0 and y = y0 + H) is
 
@@ -110,6 +114,19 @@ def scene_parameters(scene):
         H = top - y0
     if H <= 0:
         raise ValueError(f"fluid blocks have non-positive height H = {H}")
+    # A free-slip wall (slip = "free", docs/theory.md §6.4) is a plane of symmetry: the fluid
+    # is one half of a channel of height 2 H between no-slip walls.
+    free = [b for b in scene.get("blocks", [])
+            if b.get("kind") == "wall" and b.get("slip") == "free"]
+    above = [b for b in free if "min" in b and float(b["min"][1]) >= y0 + H - 1e-9 * H]
+    below = [b for b in free if "max" in b and float(b["max"][1]) <= y0 + 1e-9 * H]
+    if len(free) != len(above) + len(below) or (above and below):
+        raise ValueError("slip = \"free\" walls: this check takes one free-slip wall, a box above "
+                         "the fluid or below it (the channel's plane of symmetry)")
+    if below:
+        y0 -= H
+    if free:
+        H *= 2.0
     if rho <= 0 or mu <= 0:
         raise ValueError("fluid.density and fluid.viscosity must be > 0")
     return rho, mu, F, y0, H
