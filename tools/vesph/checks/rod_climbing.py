@@ -5,7 +5,7 @@ around a rotating rod against the second-order theory (Joseph & Fosdick 1973).
 Usage
 -----
     tools/vesph-post rod_climbing_check H5FILE [H5FILE ...] [--frames 4] [--tolerance 0.15]
-        [--steady-tolerance 0.1] [--void-limit 0.7] [--reference couette|surface] [--report-only]
+        [--steady-tolerance 0.1] [--startup-tolerance 0.03] [--void-limit 0.7] [--reference couette|surface] [--report-only]
         [--csv CSV] [--png PNG]
         [--sweep-csv CSV] [--sweep-png PNG]
 
@@ -26,9 +26,16 @@ column height, sum m_i/rho_i over the annulus' area, is no measure of the surfac
 volume m/rho need not be the space it fills next to a wall, and the first annulus' column does
 not follow its top particles.) The measured rise is
     dh = h(a .. a + dx) - h(R/2 .. R - dx),
-averaged over the last --frames frames (default 4). The steady state: the mean of those frames
-against the mean of the --frames before them; their difference must be below
---steady-tolerance (default 10 %) of |reference|.
+averaged over the last --frames frames (default 4). The steady state, two ways: the mean of
+those frames against the mean of the --frames before them, their difference below
+--steady-tolerance (default 10 %) of |reference|; and the start-up of the flow itself: the
+azimuthal velocity of circular Couette flow started from rest with the rod (its ramp_time
+followed), v_t = nu0 (v_rr + v_r/r - v/r^2) with v(a) = omega a, v(R) = 0, nu0 = (eta_s +
+eta_p)/rho (viscous: a polymer's lambda is short beside the spin-up time (R - a)^2/(pi^2 nu0)),
+gives the theory's rise at the time of the first averaged frame; it must have reached
+1 - --startup-tolerance (default 3 %) of the steady rise. The spin-up is slow: the far part of a
+container R = 8a takes seconds (Newtonian nu0 = 5e-6 m^2/s: 0.87 of the steady rise at t = 1 s,
+while the frame-to-frame drift is 2 %); the frames' drift alone does not see it.
 
 Reference (the exact steady surface of a second-order fluid in circular Couette flow between
 the rod and the container; docs/validation.md §20). With v(r) = A r + B/r the Couette profile
@@ -44,8 +51,10 @@ any Wi in this viscometric flow; XPP at low Wi eta_p lambda_0b (1 - 2 alpha), it
 -alpha/2). The theory's dh is the same annulus means of h(r) as the measurement (the profile
 varies like r^-4 across the first annulus). For R -> infinity and the point value at r = a,
 h(a) - h(inf) = omega^2 (2 beta - rho a^2/2)/(rho g) (Joseph & Fosdick), printed beside it. The
-theory has no floor: the container's no-slip floor slows the flow away from the rod and drives
-a meridional circulation (docs/validation.md §20).
+theory has no floor (an infinitely deep fluid): the cases' container floor is free-slip
+(slip = "free", a plane of symmetry under which the Couette flow is exact at any depth); a no-slip
+floor slows the flow away from the rod (to half the Couette velocity at r = 4.5a in a fluid 7a
+deep) and drives a meridional circulation (docs/validation.md §20).
 
 Sanity of the run (no blow-up, no voids): the fluid mass unchanged, the fluid volume sum m/rho
 within 5 % of the first frame's, no particle faster than 5 omega a, and the filling of the
@@ -142,7 +151,7 @@ def setup(scene, dx):
         "omega": float(w[1]), "a": 0.5 * float(rod["diameter"]), "R": 0.5 * float(containers[0]["inner_diameter"]),
         "axis": np.array([axis[0], axis[2]]), "g": float(-g[1]), "rho": float(fluid["density"]),
         "eta_s": float(fluid.get("viscosity", 0.0)), "eta_p": eta_p, "lam": lam, "model": model,
-        "beta": beta, "note": note,
+        "beta": beta, "note": note, "ramp_time": float(rod.get("ramp_time", 0.0)),
         "y0": float(fluids[0]["centre"][1]) - 0.5 * float(fluids[0]["length"]),
     }
 
@@ -170,6 +179,50 @@ def theory_rise(p, dx):
     finite = annulus_mean(h, a, a + dx) - annulus_mean(h, *far_band(p, dx))
     infinite = p["omega"] ** 2 * (2 * p["beta"] - p["rho"] * a * a / 2) / (p["rho"] * p["g"])
     return finite, infinite
+
+
+def startup_rise(p, dx, t, nodes=400, steps=2000):
+    """The theory's rise (annulus means, m) at time t of circular Couette flow started from rest:
+    v_t = nu0 (v_rr + v_r/r - v/r^2) on a < r < R with v(a) = omega a f(t) (f the rod's ramp
+    factor, 1 without a ramp) and v(R) = 0, nu0 = (eta_s + eta_p)/rho, by backward Euler on a
+    uniform grid (L-stable: the impulsive start's short waves are damped, which Crank-Nicolson
+    would carry), and the surface of the same radial balance as couette_height with that v (the
+    normal stress 2 beta gamma^2 taken quasi-steady). Also returns the spin-up time
+    (R - a)^2/(pi^2 nu0), s. At t >> spin-up time the rise is the steady theory's to 3e-3 or better."""
+    from scipy.linalg import solve_banded
+    a, R, omega = p["a"], p["R"], abs(p["omega"])
+    nu = (p["eta_s"] + p["eta_p"]) / p["rho"]
+    spin_up = (R - a) ** 2 / (math.pi ** 2 * nu) if nu > 0 else math.inf
+    r = np.linspace(a, R, nodes + 1)
+    ri, dr = r[1:-1], r[1] - r[0]
+    lower = nu * (1 / dr ** 2 - 1 / (2 * dr * ri))       # coefficient of v_{i-1}
+    upper = nu * (1 / dr ** 2 + 1 / (2 * dr * ri))       # of v_{i+1}
+    diag = nu * (-2 / dr ** 2 - 1 / ri ** 2)
+    ramp_time = p.get("ramp_time", 0.0)
+
+    def rod(time):
+        if ramp_time > 0 and time < ramp_time:
+            return omega * a * 0.5 * (1 - math.cos(math.pi * time / ramp_time))
+        return omega * a
+
+    v = np.zeros(nodes + 1)
+    if t > 0:
+        dt = t / steps
+        band = np.zeros((3, nodes - 1))
+        band[0, 1:] = -dt * upper[:-1]
+        band[1] = 1 - dt * diag
+        band[2, :-1] = -dt * lower[1:]
+        for k in range(steps):
+            v[0] = rod((k + 1) * dt)
+            rhs = v[1:-1].copy()
+            rhs[0] += dt * lower[0] * v[0]
+            v[1:-1] = solve_banded((1, 1), band, rhs)
+    spin = v / r
+    gamma = r * np.gradient(spin, r, edge_order=2)
+    slope = (v * v / r - 2 * p["beta"] * gamma * gamma / (p["rho"] * r)) / p["g"]
+    h = np.concatenate([[0.0], np.cumsum(0.5 * (slope[1:] + slope[:-1]) * np.diff(r))])
+    hfun = lambda x: np.interp(x, r, h)  # noqa: E731
+    return annulus_mean(hfun, a, a + dx) - annulus_mean(hfun, *far_band(p, dx)), spin_up
 
 
 def column_heights(r, vol, edges):
@@ -276,8 +329,8 @@ def surface_flow_profile(edges, v_surf, p, dx):
     return means - band_mean(means, edges, *far_band(p, dx))
 
 
-def check_file(path, frames_avg=4, tolerance=0.15, steady_tolerance=0.1, void_limit=0.7, report_only=False,
-               csv=None, png=None, reference_kind="couette", out=sys.stdout, err=sys.stderr):
+def check_file(path, frames_avg=4, tolerance=0.15, steady_tolerance=0.1, startup_tolerance=0.03, void_limit=0.7,
+               report_only=False, csv=None, png=None, reference_kind="couette", out=sys.stdout, err=sys.stderr):
     """Check one output; returns (status, summary dict or None)."""
     try:
         h5 = Output(path)
@@ -355,6 +408,21 @@ def check_file(path, frames_avg=4, tolerance=0.15, steady_tolerance=0.1, void_li
               f"{'' if check else ' [reported only]'}: {'ok' if ok else 'FAIL' if check else 'outside'}", file=out)
         print(f"steady: the mean of the {n} frames before differs by {drift:.3g} m = {100 * drift / scale:.3g} % of the reference"
               f" (within {100 * steady_tolerance:g} %): {'ok' if steady else 'FAIL'}", file=out)
+        # The flow's own approach to its steady state (docstring): the start-up of Couette flow.
+        startups = [startup_rise(p, dx, m["time"])[0] for m in last]
+        spin_up = startup_rise(p, dx, 0.0)[1]
+        reached = startups[0] / theory if theory else math.nan
+        started = abs(1 - reached) <= startup_tolerance
+        startup_mean = float(np.mean(startups))
+        print(f"start-up: Couette flow started from rest with the rod (nu0 = {(p['eta_s'] + p['eta_p']) / p['rho']:.4g} m^2/s,"
+              f" spin-up time (R - a)^2/(pi^2 nu0) = {spin_up:.4g} s) has {reached:.3f} of its steady rise at"
+              f" t = {last[0]['time']:.4g} s (within {100 * startup_tolerance:g} %): {'ok' if started else 'FAIL'};"
+              f" its rise over the same frames {startup_mean:.5g} m, measured/that = "
+              f"{rise / startup_mean if startup_mean else math.nan:.3f}", file=out)
+        if not started:
+            problems.append(f"not steady: the start-up of the Couette flow has {reached:.3f} of its steady rise at "
+                            f"t = {last[0]['time']:.4g} s (spin-up time {spin_up:.3g} s: run longer, or raise "
+                            f"--startup-tolerance)")
         print(f"sanity: mass drift {rows[-1]['mass'] / m0 - 1:.2e}, volume {100 * (rows[-1]['volume'] / v0 - 1):+.3g} %,"
               f" max speed {max(m['max_speed'] for m in rows) / (abs(omega) * a):.3g} omega a,"
               f" least interior filling {min(m['fill'] for m in rows[1:]) if len(rows) > 1 else 1.0:.3f}"
@@ -377,7 +445,7 @@ def check_file(path, frames_avg=4, tolerance=0.15, steady_tolerance=0.1, void_li
             _picture(h5, p, dx, edges, prof, hfun, far_th, surface_ref, png)
             print(f"png: {png}", file=out)
     summary = {"path": path, "omega": omega, "wi": wi, "rise": rise, "theory": theory, "infinite": infinite,
-               "surface": surface_rise,
+               "surface": surface_rise, "startup_reached": reached,
                "model": p["model"], "dx": dx, "a": a, "drift": drift}
     return (1 if problems else 0), summary, problems
 
@@ -469,6 +537,8 @@ def main(argv=None):
     ap.add_argument("--tolerance", type=float, default=0.15, help="fraction of the theory's rise (default 0.15)")
     ap.add_argument("--steady-tolerance", type=float, default=0.1,
                     help="change between the last two groups of frames, fraction of the theory (default 0.1)")
+    ap.add_argument("--startup-tolerance", type=float, default=0.03,
+                    help="the Couette start-up's rise at the averaged frames against its steady rise (default 0.03)")
     ap.add_argument("--void-limit", type=float, default=0.7, help="least interior filling (default 0.7)")
     ap.add_argument("--reference", choices=("couette", "surface"), default="couette",
                     help="compare with the Couette-profile theory (default) or the surface-flow reference")
@@ -483,8 +553,8 @@ def main(argv=None):
     status, summaries, problems = 0, [], []
     for i, path in enumerate(a.h5files):
         last = i == len(a.h5files) - 1
-        res = check_file(path, a.frames, a.tolerance, a.steady_tolerance, a.void_limit, a.report_only,
-                         a.csv if last else None, a.png if last else None, a.reference)
+        res = check_file(path, a.frames, a.tolerance, a.steady_tolerance, a.startup_tolerance, a.void_limit,
+                         a.report_only, a.csv if last else None, a.png if last else None, a.reference)
         if res[1] is None:
             status = 1
             continue
