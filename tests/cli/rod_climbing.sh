@@ -1,14 +1,14 @@
 # Rod climbing (docs/validation.md §20), the CI version: the scenes of cases/rod_climbing_*.toml
 # made small and short (container R = 4a instead of 8a, fluid 3.5a deep instead of 7a, the rod
 # at omega = 20 rad/s, 0.2 s: about 600 steps of 4755 particles each), a test of stability and
-# of the sign of the effect only: the Newtonian surface falls at the rod (measured -0.066 dx), an
-# Oldroyd-B fluid with 2 eta_p lambda > rho a^2/2 (lambda = 0.05 s, Wi = 1) climbs it (+0.107 dx),
-# and one with 2 eta_p lambda < rho a^2/2 (lambda = 0.005 s, Wi = 0.1) still falls (-0.057 dx; the
-# theory: by 0.75 of the Newtonian fall). The last is what the case's both_sides_diffusion
-# mends: with the whole polymer viscosity through eq. 27 at this rod of 2 dx the Wi = 0.1 fluid
-# climbed (+0.102 dx) and the Wi = 1 climb was 1.8 times the theory's (+0.68 dx against +0.39);
-# with it every run here is 0.25-0.30 of its theory at 0.2 s, before the surface has settled
-# (validation.md §20).
+# of the sign of the effect only: the Newtonian surface falls at the rod (measured -0.079 dx), an
+# Oldroyd-B fluid with 2 eta_p lambda > rho a^2/2 (lambda = 0.05 s, Wi = 1) climbs it (+0.053 dx),
+# and one with 2 eta_p lambda < rho a^2/2 (lambda = 0.005 s, Wi = 0.1) still falls (-0.058 dx; the
+# theory: by 0.75 of the Newtonian fall). The bounds are about half of each measured rise. The
+# last is what the case's both_sides_diffusion mends: with the whole polymer viscosity through
+# eq. 27 at this rod of 2 dx the Wi = 0.1 fluid climbed (+0.102 dx, the fluids before session 20).
+# (Session 20: the cases' fluids more viscous, eta0 = 0.0225 Pa s, and their floor free-slip; with
+# the fluids before, -0.066 / +0.107 / -0.057 dx.)
 . "$(dirname "$0")/lib.sh"
 SMALL="--set domain.min=[-0.0055,-0.0015,-0.0055] --set domain.max=[0.0055,0.008,0.0055]
  --set blocks[0].outer_diameter=0.008 --set blocks[0].length=0.0035 --set blocks[0].centre=[0.0,0.00175,0.0]
@@ -35,7 +35,7 @@ from vesph.checks.rod_climbing import measure_frame, setup
 from vesph.output import Output
 fields = ("kind", "position", "velocity", "mass", "density")
 # (the expected sign, the bound on the rise in dx): about half of each run's measured rise
-for path, (sign, bound) in zip(sys.argv[1:], ((-1, -0.02), (1, 0.05), (-1, -0.015))):
+for path, (sign, bound) in zip(sys.argv[1:], ((-1, -0.04), (1, 0.025), (-1, -0.025))):
     with Output(path) as h5:
         p, dx = setup(h5.scene, h5.dx), h5.dx
         rows = [measure_frame(h5.read(k, fields), p, dx) for k in range(len(h5.frames))]
