@@ -158,8 +158,6 @@ void DummyWalls<D>::update(const RhsContext<D>& ctx, const NeighbourList<D>& lis
     for (const Field* f : interpolated_)
       if (any_image_ && (interpolated_.size() > 8 || f->components > 8))
         throw std::logic_error("image walls interpolate at most 8 fields of at most 8 components");
-    // Fang: "the normal component of the elastic stress ... is set to zero" on the boundary
-    // particles: the stress tensors (D (D + 1) / 2 components).
     // The second-order fluid's wall ghost of the lagged acceleration is the no-slip one (-a~,
     // vesph/physics/second_order_fluid.cpp), which a free-slip wall would contradict.
     if (any_free_slip_)
@@ -167,6 +165,8 @@ void DummyWalls<D>::update(const RhsContext<D>& ctx, const NeighbourList<D>& lis
         if (f->name == "lagged_acceleration")
           throw InputError("blocks: slip = \"free\" is not implemented with the second-order fluid's lagged acceleration "
                            "(its wall ghost is the no-slip one); use slip = \"no\"");
+    // Fang: "the normal component of the elastic stress ... is set to zero" on the boundary
+    // particles: the stress tensors (D (D + 1) / 2 components).
     for (Field* f : interpolated_)
       is_stress_.push_back((f->name == "elastic_stress" || f->name == "extra_stress") && f->components == (D == 2 ? 3 : 6));
   }
