@@ -143,7 +143,6 @@ void buildMovingWalls(BoundaryBuild<D>& b) {
   for (std::size_t k = 0; k < tables.size(); ++k) {
     ConfigTable& t = tables[k];
     const BlockParticles& span = b.blocks[k];
-    const bool moves = (span.wall && t.has("velocity")) || t.has("angular_velocity") || t.has("ramp_time");
     if (!span.wall) {
       for (const char* key : kMotionKeys)
         if (t.has(key))
@@ -153,7 +152,8 @@ void buildMovingWalls(BoundaryBuild<D>& b) {
     }
     if (t.has("axis_point") && !t.has("angular_velocity"))
       t.fail("axis_point", "no axis_point without angular_velocity (the point the wall rotates about)");
-    if (!moves) continue;
+    if (std::none_of(std::begin(kWallMotionKeys), std::end(kWallMotionKeys), [&](const char* key) { return t.has(key); }))
+      continue;
     WallMotion<D> m;
     if (t.has("velocity")) m.velocity = t.vector<D>("velocity", std::nullopt, "m/s");
     if (t.has("angular_velocity")) {

@@ -13,6 +13,8 @@
 
 #include <Eigen/Geometry>  // cross products (frame = "polar" checks)
 
+#include "vesph/boundary/moving_walls.hpp"  // kWallMotionKeys
+
 namespace vesph {
 namespace {
 
@@ -252,7 +254,7 @@ class BlockReader {
       if (block.free_slip && block.image)
         b.fail("slip", "\"no\" with treatment = \"image\" (Fang's eq. 47 extrapolates through the wall's own velocity; "
                        "free slip is for dummy layers)");
-      for (const char* key : {"velocity", "angular_velocity", "ramp_time"})
+      for (const char* key : kWallMotionKeys)
         if (block.free_slip && b.has(key))
           b.fail("slip", std::string("\"no\" on a moving wall (") + key + "; free slip is for walls at rest)");
     }

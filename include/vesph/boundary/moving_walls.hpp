@@ -26,6 +26,10 @@
 
 namespace vesph {
 
+// The [[blocks]] keys that set a wall block moving (buildMovingWalls); the scene parser refuses
+// slip = "free" with any of them (a free-slip wall is at rest): one list for both.
+inline constexpr const char* kWallMotionKeys[] = {"velocity", "angular_velocity", "ramp_time"};
+
 template <int D>
 struct WallMotion {
   Vec<D> velocity = Vec<D>::Zero();  // U, m/s

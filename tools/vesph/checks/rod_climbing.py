@@ -181,14 +181,16 @@ def theory_rise(p, dx):
     return finite, infinite
 
 
-def startup_rise(p, dx, t, nodes=400, steps=2000):
-    """The theory's rise (annulus means, m) at time t of circular Couette flow started from rest:
-    v_t = nu0 (v_rr + v_r/r - v/r^2) on a < r < R with v(a) = omega a f(t) (f the rod's ramp
-    factor, 1 without a ramp) and v(R) = 0, nu0 = (eta_s + eta_p)/rho, by backward Euler on a
+def startup_rise(p, dx, times, nodes=400, steps=2000):
+    """The theory's rise (annulus means, m) at each of the times of circular Couette flow started
+    from rest: v_t = nu0 (v_rr + v_r/r - v/r^2) on a < r < R with v(a) = omega a f(t) (f the rod's
+    ramp factor, 1 without a ramp) and v(R) = 0, nu0 = (eta_s + eta_p)/rho, by backward Euler on a
     uniform grid (L-stable: the impulsive start's short waves are damped, which Crank-Nicolson
-    would carry), and the surface of the same radial balance as couette_height with that v (the
-    normal stress 2 beta gamma^2 taken quasi-steady). Also returns the spin-up time
-    (R - a)^2/(pi^2 nu0), s. At t >> spin-up time the rise is the steady theory's to 3e-3 or better."""
+    would carry), one run through the sorted times with steps steps to the last (each interval
+    at least one), and the surface of the same radial balance as couette_height with that v (the
+    normal stress 2 beta gamma^2 taken quasi-steady). Returns the rises in the order of times and
+    the spin-up time (R - a)^2/(pi^2 nu0), s. At t >> spin-up time the rise is the steady
+    theory's to 3e-3 or better."""
     from scipy.linalg import solve_banded
     a, R, omega = p["a"], p["R"], abs(p["omega"])
     nu = (p["eta_s"] + p["eta_p"]) / p["rho"]
@@ -205,24 +207,36 @@ def startup_rise(p, dx, t, nodes=400, steps=2000):
             return omega * a * 0.5 * (1 - math.cos(math.pi * time / ramp_time))
         return omega * a
 
+    def rise(v):
+        spin = v / r
+        gamma = r * np.gradient(spin, r, edge_order=2)
+        slope = (v * v / r - 2 * p["beta"] * gamma * gamma / (p["rho"] * r)) / p["g"]
+        h = np.concatenate([[0.0], np.cumsum(0.5 * (slope[1:] + slope[:-1]) * np.diff(r))])
+        hfun = lambda x: np.interp(x, r, h)  # noqa: E731
+        return annulus_mean(hfun, a, a + dx) - annulus_mean(hfun, *far_band(p, dx))
+
+    order = sorted(range(len(times)), key=lambda k: times[k])
+    t_last = max(times) if len(times) else 0.0
+    rises = [0.0] * len(times)
     v = np.zeros(nodes + 1)
-    if t > 0:
-        dt = t / steps
-        band = np.zeros((3, nodes - 1))
-        band[0, 1:] = -dt * upper[:-1]
-        band[1] = 1 - dt * diag
-        band[2, :-1] = -dt * lower[1:]
-        for k in range(steps):
-            v[0] = rod((k + 1) * dt)
-            rhs = v[1:-1].copy()
-            rhs[0] += dt * lower[0] * v[0]
-            v[1:-1] = solve_banded((1, 1), band, rhs)
-    spin = v / r
-    gamma = r * np.gradient(spin, r, edge_order=2)
-    slope = (v * v / r - 2 * p["beta"] * gamma * gamma / (p["rho"] * r)) / p["g"]
-    h = np.concatenate([[0.0], np.cumsum(0.5 * (slope[1:] + slope[:-1]) * np.diff(r))])
-    hfun = lambda x: np.interp(x, r, h)  # noqa: E731
-    return annulus_mean(hfun, a, a + dx) - annulus_mean(hfun, *far_band(p, dx)), spin_up
+    t_now = 0.0
+    for k in order:
+        span = times[k] - t_now
+        if span > 0:
+            n = max(1, math.ceil(steps * span / t_last))
+            dt = span / n
+            band = np.zeros((3, nodes - 1))
+            band[0, 1:] = -dt * upper[:-1]
+            band[1] = 1 - dt * diag
+            band[2, :-1] = -dt * lower[1:]
+            for j in range(n):
+                v[0] = rod(t_now + (j + 1) * dt)
+                rhs = v[1:-1].copy()
+                rhs[0] += dt * lower[0] * v[0]
+                v[1:-1] = solve_banded((1, 1), band, rhs)
+            t_now = times[k]
+        rises[k] = rise(v)
+    return rises, spin_up
 
 
 def column_heights(r, vol, edges):
@@ -409,9 +423,7 @@ def check_file(path, frames_avg=4, tolerance=0.15, steady_tolerance=0.1, startup
         print(f"steady: the mean of the {n} frames before differs by {drift:.3g} m = {100 * drift / scale:.3g} % of the reference"
               f" (within {100 * steady_tolerance:g} %): {'ok' if steady else 'FAIL'}", file=out)
         # The flow's own approach to its steady state (docstring): the start-up of Couette flow.
-        started_up = [startup_rise(p, dx, m["time"]) for m in last]
-        startups = [rise_t for rise_t, _ in started_up]
-        spin_up = started_up[0][1]
+        startups, spin_up = startup_rise(p, dx, [m["time"] for m in last])
         reached = startups[0] / theory if theory else math.nan
         started = abs(1 - reached) <= startup_tolerance
         startup_mean = float(np.mean(startups))
