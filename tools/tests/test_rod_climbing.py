@@ -3,7 +3,7 @@ particles on rings about the rod, their tops raised by a chosen surface profile,
 Couette profile. The second-order profile tends to Joseph & Fosdick's h(a) - h(inf) in a wide
 container; the exact Oldroyd-B and Newtonian surfaces pass (with the CSV and PNG); a dip 30 %
 short, a surface still rising, a flow still spinning up (the Couette start-up), a void and a 2D
-scene fail; several files give the table of the
+scene fail; --until judges a plateau before a late drift; --rest measures from the surface at rest; several files give the table of the
 rise against omega^2."""
 
 import os
@@ -94,9 +94,13 @@ def particles(profile, omega, void=False):
     return pos, vel
 
 
-def write_case(path, omega=10.0, model="oldroyd_b", scale=1.0, growing=False, void=False, dim=3, viscosity=0.05):
+def write_case(path, omega=10.0, model="oldroyd_b", scale=1.0, growing=False, void=False, dim=3, viscosity=0.05,
+               late_drift=False, first_annulus_offset=0.0):
     """The synthetic output; viscosity (Pa s) sets the Couette start-up the check asks for: at the
-    default 0.05 its spin-up time (R - a)^2/(pi^2 nu0) is 0.1 s or less, well before the frames."""
+    default 0.05 its spin-up time (R - a)^2/(pi^2 nu0) is 0.1 s or less, well before the frames.
+    late_drift: the exact surface to t = 0.3 s, 1.5 times it after (steady again).
+    first_annulus_offset (m): added to the first ring's surface in every frame after the first
+    (a wall's static dip, as the rest run of --rest shows it)."""
     from vesph.checks import rod_climbing as RC
 
     beta = 0.01 * 0.05 if model == "oldroyd_b" else 0.0
@@ -107,8 +111,11 @@ def write_case(path, omega=10.0, model="oldroyd_b", scale=1.0, growing=False, vo
     frames = []
     times = [0.0, 0.1, 0.2, 0.3, 0.4, 0.5]
     for i, t in enumerate(times):
-        amp = 0.0 if i == 0 else (t / times[-1] if growing else 1.0)
-        pos, vel = particles(scale * amp * means, omega, void=void and i > 0)
+        amp = 0.0 if i == 0 else (t / times[-1] if growing else 1.5 if late_drift and t > 0.3 else 1.0)
+        profile = scale * amp * means
+        if i > 0:
+            profile = profile + first_annulus_offset * (np.arange(len(means)) == 0)
+        pos, vel = particles(profile, omega, void=void and i > 0)
         n = len(pos)
         frames.append({"time": t, "step": 10 * i, "position": pos, "velocity": vel if i else 0 * vel,
                        "kind": np.zeros(n, np.uint8), "id": np.arange(n, dtype=np.uint64),
@@ -170,6 +177,32 @@ def make_rod_climbing_tests(tmp):
         h5 = write_case(os.path.join(tmp, "grow.h5"), growing=True)
         rc, out, err = run(h5, "--frames", "2")
         expect(rc == 1 and "not steady" in err, f"exit {rc}", out + err)
+
+    @t
+    def until_judges_the_plateau_before_a_late_drift():
+        h5 = write_case(os.path.join(tmp, "late.h5"), late_drift=True)
+        rc, out, err = run(h5, "--frames", "1")
+        expect(rc == 1 and "measured/theory = 1.500" in out, f"the whole run: exit {rc}", out + err)
+        rc, out, err = run(h5, "--frames", "1", "--until", "0.3")
+        expect(rc == 0 and "measured/theory = 1.000" in out and "t = 0.3..0.3 s" in out, f"--until 0.3: exit {rc}",
+               out + err)
+        rc, out, err = run(h5, "--until", "0")
+        expect(rc == 2 and "--until" in err, f"--until 0: exit {rc}", out + err)
+
+    @t
+    def rest_subtracts_the_surface_at_rest():
+        # A static dip of 0.1 dx at the rod in the turning run and in the run at rest: measured
+        # from the far level the rise is off, from the surface at rest it is the theory.
+        dip = -0.1 * DX
+        h5 = write_case(os.path.join(tmp, "dipped.h5"), first_annulus_offset=dip)
+        rest = write_case(os.path.join(tmp, "rest.h5"), omega=0.0, first_annulus_offset=dip)
+        rc, out, err = run(h5, "--frames", "2")
+        expect(rc == 1 and "measured/theory = 1.000" not in out, f"without --rest: exit {rc}", out + err)
+        rc, out, err = run(h5, "--frames", "2", "--rest", rest)
+        expect(rc == 0 and "measured/theory = 1.000" in out and "at rest (the same container" in out
+               and "-0.1000 dx" in out, f"with --rest: exit {rc}", out + err)
+        rc, out, err = run(h5, "--frames", "2", "--rest", h5)
+        expect(rc == 1 and "must not turn" in err, f"a turning run as the rest: exit {rc}", out + err)
 
     @t
     def a_flow_still_spinning_up_is_not_steady():

@@ -5,8 +5,8 @@ around a rotating rod against the second-order theory (Joseph & Fosdick 1973).
 Usage
 -----
     tools/vesph-post rod_climbing_check H5FILE [H5FILE ...] [--frames 4] [--tolerance 0.15]
-        [--steady-tolerance 0.1] [--startup-tolerance 0.03] [--void-limit 0.7] [--reference couette|surface] [--report-only]
-        [--csv CSV] [--png PNG]
+        [--steady-tolerance 0.1] [--startup-tolerance 0.03] [--until T] [--rest H5FILE] [--void-limit 0.7]
+        [--reference couette|surface] [--report-only] [--csv CSV] [--png PNG]
         [--sweep-csv CSV] [--sweep-png PNG]
 
 The scene (y vertical, gravity along -y): the rod is the wall block of shape "cylinder" with
@@ -26,7 +26,12 @@ column height, sum m_i/rho_i over the annulus' area, is no measure of the surfac
 volume m/rho need not be the space it fills next to a wall, and the first annulus' column does
 not follow its top particles.) The measured rise is
     dh = h(a .. a + dx) - h(R/2 .. R - dx),
-averaged over the last --frames frames (default 4). The steady state, two ways: the mean of
+averaged over the last --frames frames (default 4). With --rest, the same measure of a run of the
+same container with the rod at rest is subtracted (each annulus; its frames at the same times,
+or its last ones where it ends earlier): the surface particles next to a
+dummy-layer wall settle a few per cent of dx below the far level at rest (a = 2 dx: -0.020 dx at
+the rod, -0.037 dx at the container's wall; about 10 um at a = 2 and 3 dx), the numerical counterpart of a static meniscus,
+which an experiment subtracts too. The steady state, two ways: the mean of
 those frames against the mean of the --frames before them, their difference below
 --steady-tolerance (default 10 %) of |reference|; and the start-up of the flow itself: the
 azimuthal velocity of circular Couette flow started from rest with the rod (its ramp_time
@@ -103,8 +108,9 @@ def _blocks(scene, kind, shape):
     return [b for b in scene.get("blocks", []) if b.get("kind") == kind and b.get("shape") == shape]
 
 
-def setup(scene, dx):
-    """The rod, container, fluid and gravity of a rod-climbing scene: a dict."""
+def setup(scene, dx, at_rest=False):
+    """The rod, container, fluid and gravity of a rod-climbing scene: a dict. at_rest: the rod's
+    angular_velocity must be zero (the baseline run of --rest) instead of a turn about y."""
     if int(scene.get("dimension", 2)) != 3:
         raise ValueError("rod_climbing_check is for 3D scenes")
     rods = [b for b in _blocks(scene, "wall", "cylinder") if "angular_velocity" in b]
@@ -112,7 +118,10 @@ def setup(scene, dx):
         raise ValueError("expected one turning wall cylinder (the rod, with angular_velocity)")
     rod = rods[0]
     w = np.array([float(c) for c in rod["angular_velocity"]])
-    if abs(w[0]) > 1e-12 * abs(w[1]) or abs(w[2]) > 1e-12 * abs(w[1]) or w[1] == 0:
+    if at_rest:
+        if np.any(w != 0):
+            raise ValueError("the rest run's rod must not turn (angular_velocity = [0.0, 0.0, 0.0])")
+    elif abs(w[0]) > 1e-12 * abs(w[1]) or abs(w[2]) > 1e-12 * abs(w[1]) or w[1] == 0:
         raise ValueError("the rod must turn about the vertical (y) axis")
     containers = [b for b in _blocks(scene, "wall", "tube") if "angular_velocity" not in b]
     fluids = _blocks(scene, "fluid", "tube")
@@ -343,9 +352,42 @@ def surface_flow_profile(edges, v_surf, p, dx):
     return means - band_mean(means, edges, *far_band(p, dx))
 
 
+def rest_baseline(path):
+    """The surface of the same container with the rod at rest (--rest): each frame's height of
+    each annulus above the far level, m (rows: frames; the first column is the rise at the rod),
+    the frames' times, and the geometry to match (dx, a, R, the fluid's bottom and depth).
+    Raises ValueError for a run that is no rest run."""
+    h5 = Output(path)
+    with h5:
+        dx = h5.dx
+        p = setup(h5.scene, dx, at_rest=True)
+        fluids = _blocks(h5.scene, "fluid", "tube")
+        if len(h5.frames) < 2:
+            raise ValueError(f"{path}: the rest run has {len(h5.frames)} frame(s); it needs frames after the first")
+        fields = ("kind", "position", "velocity", "mass", "density")
+        rows = [measure_frame(h5.read(k, fields), p, dx) for k in range(len(h5.frames))]
+        times = [t for _, t in h5.frames]
+    profiles = np.array([m["h"] - m["h_far"] for m in rows])
+    geometry = (dx, p["a"], p["R"], p["y0"], float(fluids[0]["length"]))
+    return profiles, times, geometry
+
+
+def _rest_frames(rest_times, times):
+    """Indices of the rest run's frames at the given times (each within 1e-9 s), or, where it
+    lacks one of them, its last len(times) frames (a rest run shorter than the run: settled)."""
+    idx = [next((k for k, t in enumerate(rest_times) if abs(t - u) <= 1e-9 * max(1.0, abs(u))), None) for u in times]
+    if all(k is not None for k in idx):
+        return idx
+    return list(range(max(1, len(rest_times) - len(times)), len(rest_times)))
+
+
 def check_file(path, frames_avg=4, tolerance=0.15, steady_tolerance=0.1, startup_tolerance=0.03, void_limit=0.7,
-               report_only=False, csv=None, png=None, reference_kind="couette", out=sys.stdout, err=sys.stderr):
-    """Check one output; returns (status, summary dict or None)."""
+               report_only=False, csv=None, png=None, reference_kind="couette", out=sys.stdout, err=sys.stderr,
+               until=None, rest=None):
+    """Check one output; returns (status, summary dict or None). until (s): judge the run as if it
+    had ended at its last frame at or before that time (the frames after it are not read). rest:
+    rest_baseline()'s result for the same container, subtracted from the surface (the rise is then
+    measured from the surface at rest, as an experiment measures it from the static meniscus)."""
     try:
         h5 = Output(path)
     except ToolError as e:
@@ -362,6 +404,8 @@ def check_file(path, frames_avg=4, tolerance=0.15, steady_tolerance=0.1, startup
         fields = ("kind", "position", "velocity", "mass", "density")
         rows = []
         for k, (name, t) in enumerate(h5.frames):
+            if until is not None and t > until * (1 + 1e-9):
+                break
             m = measure_frame(h5.read(k, fields), p, dx)
             m.update(frame=name, time=t)
             rows.append(m)
@@ -398,6 +442,21 @@ def check_file(path, frames_avg=4, tolerance=0.15, steady_tolerance=0.1, startup
         edges = rows[-1]["edges"]
         # The profiles: time means of the last frames, relative to the far level.
         prof = np.nanmean([m["h"] - m["h_far"] for m in last], axis=0)
+        raw_rise = rise
+        if rest is not None:
+            rest_profiles, rest_all_times, rest_geometry = rest
+            chosen = _rest_frames(rest_all_times, [m["time"] for m in last])
+            rest_prof = np.nanmean(rest_profiles[chosen], axis=0)
+            rest_times = [rest_all_times[k] for k in chosen]
+            fluid = _blocks(h5.scene, "fluid", "tube")[0]
+            geometry = (dx, p["a"], p["R"], p["y0"], float(fluid["length"]))
+            if len(rest_prof) != len(prof) or any(abs(u - v) > 1e-9 * max(abs(u), abs(v), dx)
+                                                  for u, v in zip(geometry, rest_geometry)):
+                print(f"FAIL: {path}: the rest run is not this container (dx, a, R, fluid bottom and depth "
+                      f"{rest_geometry} against {geometry})", file=err)
+                return 1, None, []
+            rise -= float(rest_prof[0])
+            prof = prof - rest_prof
         v_surf = np.nanmean([m["v_surf"] for m in last], axis=0)
         surface_ref = surface_flow_profile(edges, v_surf, p, dx)
         surface_rise = float(surface_ref[0])
@@ -409,8 +468,12 @@ def check_file(path, frames_avg=4, tolerance=0.15, steady_tolerance=0.1, startup
         ok = abs(error) <= tolerance
         lo, hi = far_band(p, dx)
         print(f"rise at the rod (annulus {a:.4g}..{a + dx:.4g} m) above the far level ({lo:.4g}..{hi:.4g} m), mean of the"
-              f" last {n} frames (t = {last[0]['time']:.4g}..{last[-1]['time']:.4g} s): {rise:.5g} m = {rise / dx:.4f} dx"
-              f" = {rise / a:.4g} a", file=out)
+              f" last {n} frames (t = {last[0]['time']:.4g}..{last[-1]['time']:.4g} s): {raw_rise:.5g} m ="
+              f" {raw_rise / dx:.4f} dx = {raw_rise / a:.4g} a", file=out)
+        if rest is not None:
+            print(f"at rest (the same container with the rod at rest, t = {rest_times[0]:.4g}..{rest_times[-1]:.4g} s):"
+                  f" {rest_prof[0]:.5g} m = {rest_prof[0] / dx:.4f} dx; the rise from the surface at rest"
+                  f" {rise:.5g} m = {rise / dx:.4f} dx (compared below)", file=out)
         print(f"theory (second order, Couette profile of the container, same annuli): {theory:.5g} m = {theory / dx:.4f} dx;"
               f" infinite container at r = a: {infinite:.5g} m; measured/theory = {rise / theory if theory else math.nan:.3f}",
               file=out)
@@ -459,7 +522,7 @@ def check_file(path, frames_avg=4, tolerance=0.15, steady_tolerance=0.1, startup
             print(f"png: {png}", file=out)
     summary = {"path": path, "omega": omega, "wi": wi, "rise": rise, "theory": theory, "infinite": infinite,
                "surface": surface_rise,
-               "model": p["model"], "dx": dx, "a": a, "drift": drift}
+               "model": p["model"], "dx": dx, "a": a, "drift": drift, "raw_rise": raw_rise}
     return (1 if problems else 0), summary, problems
 
 
@@ -501,7 +564,7 @@ def _picture(h5, p, dx, edges, prof, hfun, far_th, surface_ref, png):
     plt.close(fig)
 
 
-def _sweep(summaries, csv, png, out):
+def _sweep(summaries, csv, png, out, from_rest=False):
     summaries = sorted(summaries, key=lambda s: abs(s["omega"]))
     print(f"{'omega [rad/s]':>14} {'Wi':>8} {'omega^2':>10} {'rise [m]':>12} {'theory [m]':>12} {'rise/theory':>12}",
           file=out)
@@ -510,10 +573,11 @@ def _sweep(summaries, csv, png, out):
               f" {s['rise'] / s['theory'] if s['theory'] else float('nan'):12.4g}", file=out)
     if csv:
         with open(csv, "w") as fh:
-            fh.write("file,model,omega_rad_s,wi,rise_m,theory_m,infinite_m\n")
+            # rise_m: from the surface at rest with --rest (rise_above_far_m without it: the same)
+            fh.write("file,model,omega_rad_s,wi,rise_m,theory_m,infinite_m,rise_above_far_m\n")
             for s in summaries:
                 fh.write(f"{s['path']},{s['model']},{s['omega']:.9g},{s['wi']:.6g},{s['rise']:.9g},{s['theory']:.9g},"
-                         f"{s['infinite']:.9g}\n")
+                         f"{s['infinite']:.9g},{s['raw_rise']:.9g}\n")
         print(f"sweep csv: {csv}", file=out)
     if png:
         import matplotlib
@@ -533,7 +597,7 @@ def _sweep(summaries, csv, png, out):
                             textcoords="offset points", xytext=(4, -10))
         ax.axhline(0, color="0.7", lw=0.8)
         ax.set_xlabel("omega^2  [rad^2/s^2]")
-        ax.set_ylabel("h(rod) - h(far)  [dx]")
+        ax.set_ylabel("h(rod) - h(far)  [dx]" + (", from the surface at rest" if from_rest else ""))
         ax.set_title("rise at the rod against omega^2")
         ax.legend(fontsize=8)
         fig.tight_layout()
@@ -552,6 +616,14 @@ def main(argv=None):
                     help="change between the last two groups of frames, fraction of the theory (default 0.1)")
     ap.add_argument("--startup-tolerance", type=float, default=0.03,
                     help="the Couette start-up's rise at the averaged frames against its steady rise (default 0.03)")
+    ap.add_argument("--until", type=float, metavar="T",
+                    help="judge each run as if it had ended at its last frame at or before T s (e.g. a plateau "
+                         "before a late drift; default: the whole run)")
+    ap.add_argument("--rest", metavar="H5FILE",
+                    help="the same container with the rod at rest: its surface (the mean of its frames at the times "
+                         "averaged, or of its last ones where it has not all of them) is the baseline the rise is measured from, as an experiment measures from the static "
+                         "meniscus (the walls' contact with the surface moves the first annulus by a few per cent "
+                         "of dx: docs/validation.md §20)")
     ap.add_argument("--void-limit", type=float, default=0.7, help="least interior filling (default 0.7)")
     ap.add_argument("--reference", choices=("couette", "surface"), default="couette",
                     help="compare with the Couette-profile theory (default) or the surface-flow reference")
@@ -563,11 +635,22 @@ def main(argv=None):
     a = ap.parse_args(argv)
     if a.frames < 1:
         ap.error("--frames must be at least 1")
+    if a.until is not None and not a.until > 0:
+        ap.error("--until must be a time after the start, s")
     status, summaries, problems = 0, [], []
+    rest = None
+    if a.rest:
+        try:
+            rest = rest_baseline(a.rest)
+        except (ToolError, ValueError, KeyError, TypeError) as e:
+            print(f"FAIL: --rest {a.rest}: {e}", file=sys.stderr)
+            print("RESULT: FAIL")
+            return 1
     for i, path in enumerate(a.h5files):
         last = i == len(a.h5files) - 1
         res = check_file(path, a.frames, a.tolerance, a.steady_tolerance, a.startup_tolerance, a.void_limit,
-                         a.report_only, a.csv if last else None, a.png if last else None, a.reference)
+                         a.report_only, a.csv if last else None, a.png if last else None, a.reference,
+                         until=a.until, rest=rest)
         if res[1] is None:
             status = 1
             continue
@@ -576,7 +659,7 @@ def main(argv=None):
         summaries.append(summary)
         problems += [f"{path}: {q}" for q in probs]
     if len(summaries) > 1 or a.sweep_csv or a.sweep_png:
-        _sweep(summaries, a.sweep_csv, a.sweep_png, sys.stdout)
+        _sweep(summaries, a.sweep_csv, a.sweep_png, sys.stdout, from_rest=rest is not None)
     for q in problems:
         print(f"FAIL: {q}", file=sys.stderr)
     print("RESULT: " + ("FAIL" if status else "PASS"))
