@@ -15,11 +15,23 @@
 //     correction (include/vesph/isph/projection.hpp), which makes the incremental projection
 //     keep a fluid at rest exactly at rest. Not momentum conserving.
 // Wall particles carry the pressure and density given them by the wall treatment.
+// dry_walls = "omit" (symmetric and difference forms): a wall or dummy particle whose pressure
+// is negative is left out of the sum. Adami's extrapolation continues the hydrostatic pressure
+// p_f + rho_f g.(x_w - x_f) above the free surface, where it is negative: such a "dry" wall
+// particle fills the kernel of the surface particle beside the wall where a free surface has no
+// neighbour, and the pair term holds that particle below the free surface's level (a 2D tank at
+// rest: the column beside a wall that rises above the water settles 0.05 dx low, +0.015 dx with
+// this option; docs/validation.md §20, session 21). Off by default: it also removes the pull of a
+// wall on fluid in tension beside it (a die's lip), and the push of a dry wall particle on fluid
+// that climbs the wall above the level where its extrapolated pressure turns negative.
 // free_surface_mirror = true (needs [effects.free_surface]): for a particle flagged on the free
 // surface, the zero-pressure condition by mirrored dummy particles, thesis eq. (4.1): with
 // p_i = 0 and a mirror image of every neighbour carrying -p_j,
 //       dv_i/dt = - (2/rho_i) sum_j (m_j/rho_j) p_j grad_i W_ij
 // in place of the form above.
+#include <cstdint>
+#include <limits>
+
 #include "vesph/core/renormalisation.hpp"
 #include "vesph/physics/registry.hpp"
 
@@ -32,7 +44,8 @@ template <int D, bool Mirror>
 class PressureGradientT final : public PairEffect<D, PressureGradientT<D, Mirror>> {
  public:
   explicit PressureGradientT(ConfigTable& cfg)
-      : symmetric_(cfg.string("form", "symmetric") == "symmetric") {}
+      : symmetric_(cfg.string("form", "symmetric") == "symmetric"),
+        omit_dry_walls_(cfg.choice("dry_walls", "include", {"include", "omit"}) == "omit") {}
   std::string_view name() const override { return "pressure_gradient"; }
   Phase phase() const override { return Phase::forces; }
   std::string_view form() const override { return symmetric_ ? "symmetric" : "difference"; }
@@ -58,16 +71,23 @@ class PressureGradientT final : public PairEffect<D, PressureGradientT<D, Mirror
     const double* p;
     const double* rho;
     const double* m;
+    std::size_t first_fixed;  // wall particles are [first_fixed, ...): with dry_walls = "omit"
   };
   Local begin(const RhsContext<D>& ctx, Index i) const {
     const ParticleSet<D>& ps = ctx.particles;
     const double p = pressure_->data[i], rho = ps.density[i];
     bool surface = false;
     if constexpr (Mirror) surface = surface_->data[i] > 0.5;
-    return {Vec<D>::Zero(), surface, p, rho, p / (rho * rho), pressure_->data.data(), ps.density.data(), ps.mass.data()};
+    // Without dry_walls = "omit" no index is >= first_fixed: the pair test below never holds.
+    const std::size_t first_fixed = omit_dry_walls_ ? ps.n_moving : std::numeric_limits<std::size_t>::max();
+    return {Vec<D>::Zero(), surface, p, rho, p / (rho * rho), pressure_->data.data(), ps.density.data(), ps.mass.data(),
+            first_fixed};
   }
-  void pair(const RhsContext<D>&, Index, const Neighbour<D>& nb, Local& l) const {
+  void pair(const RhsContext<D>& ctx, Index, const Neighbour<D>& nb, Local& l) const {
     const double pj = l.p[nb.j], inv_rhoj = 1.0 / l.rho[nb.j], mj = l.m[nb.j];
+    if (nb.j >= l.first_fixed && pj < 0 &&
+        ctx.particles.kind[nb.j] != static_cast<std::uint8_t>(ParticleKind::inflow))
+      return;  // a dry wall particle (dry_walls = "omit", above)
     double coef = symmetric_ ? mj * (l.pi_over_rho2 + pj * inv_rhoj * inv_rhoj) : mj * inv_rhoj * (pj - l.pi) / l.rhoi;
     if constexpr (Mirror)
       if (l.surface) coef = 2.0 * mj * inv_rhoj * pj / l.rhoi;
@@ -79,6 +99,7 @@ class PressureGradientT final : public PairEffect<D, PressureGradientT<D, Mirror
 
  private:
   bool symmetric_;
+  bool omit_dry_walls_;
   const Field* pressure_ = nullptr;
   const Field* surface_ = nullptr;
 };

@@ -30,7 +30,8 @@ averaged over the last --frames frames (default 4). With --rest, the same measur
 same container with the rod at rest is subtracted (each annulus; its frames at the same times,
 or its last ones where it ends earlier): the surface particles next to a
 dummy-layer wall settle a few per cent of dx below the far level at rest (a = 2 dx: -0.020 dx at
-the rod, -0.037 dx at the container's wall; about 10 um at a = 2 and 3 dx), the numerical counterpart of a static meniscus,
+the rod, -0.037 dx at the container's wall; about 10 um at a = 2 and 3 dx; with the dry wall
+particles out of the pressure force, [effects.pressure_gradient] dry_walls = "omit", +0.018 dx), the numerical counterpart of a static meniscus,
 which an experiment subtracts too. The steady state, two ways: the mean of
 those frames against the mean of the --frames before them, their difference below
 --steady-tolerance (default 10 %) of |reference|; and the start-up of the flow itself: the
