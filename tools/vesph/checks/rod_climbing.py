@@ -162,7 +162,7 @@ def setup(scene, dx, at_rest=False):
         "axis": np.array([axis[0], axis[2]]), "g": float(-g[1]), "rho": float(fluid["density"]),
         "eta_s": float(fluid.get("viscosity", 0.0)), "eta_p": eta_p, "lam": lam, "model": model,
         "beta": beta, "note": note, "ramp_time": float(rod.get("ramp_time", 0.0)),
-        "y0": float(fluids[0]["centre"][1]) - 0.5 * float(fluids[0]["length"]),
+        "y0": float(fluids[0]["centre"][1]) - 0.5 * float(fluids[0]["length"]), "depth": float(fluids[0]["length"]),
     }
 
 
@@ -353,6 +353,27 @@ def surface_flow_profile(edges, v_surf, p, dx):
     return means - band_mean(means, edges, *far_band(p, dx))
 
 
+FRAME_FIELDS = ("kind", "position", "velocity", "mass", "density")
+
+
+def _measured_frames(h5, p, dx, until=None):
+    """measure_frame of every frame of an open output (to its last frame at or before until, s,
+    when given), each with its frame name and time."""
+    rows = []
+    for k, (name, t) in enumerate(h5.frames):
+        if until is not None and t > until * (1 + 1e-9):
+            break
+        m = measure_frame(h5.read(k, FRAME_FIELDS), p, dx)
+        m.update(frame=name, time=t)
+        rows.append(m)
+    return rows
+
+
+def _geometry(p, dx):
+    """What a rest run must share with the run it is the baseline of (--rest)."""
+    return (dx, p["a"], p["R"], p["y0"], p["depth"])
+
+
 def rest_baseline(path):
     """The surface of the same container with the rod at rest (--rest): each frame's height of
     each annulus above the far level, m (rows: frames; the first column is the rise at the rod),
@@ -362,15 +383,11 @@ def rest_baseline(path):
     with h5:
         dx = h5.dx
         p = setup(h5.scene, dx, at_rest=True)
-        fluids = _blocks(h5.scene, "fluid", "tube")
         if len(h5.frames) < 2:
             raise ValueError(f"{path}: the rest run has {len(h5.frames)} frame(s); it needs frames after the first")
-        fields = ("kind", "position", "velocity", "mass", "density")
-        rows = [measure_frame(h5.read(k, fields), p, dx) for k in range(len(h5.frames))]
-        times = [t for _, t in h5.frames]
+        rows = _measured_frames(h5, p, dx)
     profiles = np.array([m["h"] - m["h_far"] for m in rows])
-    geometry = (dx, p["a"], p["R"], p["y0"], float(fluids[0]["length"]))
-    return profiles, times, geometry
+    return profiles, [m["time"] for m in rows], _geometry(p, dx)
 
 
 def _rest_frames(rest_times, times):
@@ -402,14 +419,7 @@ def check_file(path, frames_avg=4, tolerance=0.15, steady_tolerance=0.1, startup
         except (ValueError, KeyError, TypeError) as e:
             print(f"FAIL: {path}: {e}", file=err)
             return 1, None, []
-        fields = ("kind", "position", "velocity", "mass", "density")
-        rows = []
-        for k, (name, t) in enumerate(h5.frames):
-            if until is not None and t > until * (1 + 1e-9):
-                break
-            m = measure_frame(h5.read(k, fields), p, dx)
-            m.update(frame=name, time=t)
-            rows.append(m)
+        rows = _measured_frames(h5, p, dx, until)
         theory, infinite = theory_rise(p, dx)
         a, R, omega = p["a"], p["R"], p["omega"]
         wi = p["lam"] * abs(omega)
@@ -449,8 +459,7 @@ def check_file(path, frames_avg=4, tolerance=0.15, steady_tolerance=0.1, startup
             chosen = _rest_frames(rest_all_times, [m["time"] for m in last])
             rest_prof = np.nanmean(rest_profiles[chosen], axis=0)
             rest_times = [rest_all_times[k] for k in chosen]
-            fluid = _blocks(h5.scene, "fluid", "tube")[0]
-            geometry = (dx, p["a"], p["R"], p["y0"], float(fluid["length"]))
+            geometry = _geometry(p, dx)
             if len(rest_prof) != len(prof) or any(abs(u - v) > 1e-9 * max(abs(u), abs(v), dx)
                                                   for u, v in zip(geometry, rest_geometry)):
                 print(f"FAIL: {path}: the rest run is not this container (dx, a, R, fluid bottom and depth "
