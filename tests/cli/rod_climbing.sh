@@ -43,18 +43,17 @@ PYTHONPATH=$SRC/tools $PY - "$WORK/rest/rod_climbing_newtonian.h5" "$WORK/n/rod_
   >"$WORK/sign.log" 2>&1 <<'PYEOF' && pass || fail "sign of the effect: $(tail -5 "$WORK/sign.log")"
 import sys
 import numpy as np
-from vesph.checks.rod_climbing import measure_frame, setup
+from vesph.checks.rod_climbing import FRAME_FIELDS, measure_frame, setup
 from vesph.output import Output
-fields = ("kind", "position", "velocity", "mass", "density")
 with Output(sys.argv[1]) as h5:
-    rest = measure_frame(h5.read(len(h5.frames) - 1, fields), setup(h5.scene, h5.dx, at_rest=True), h5.dx)["rise"]
+    rest = measure_frame(h5.read(len(h5.frames) - 1, FRAME_FIELDS), setup(h5.scene, h5.dx, at_rest=True), h5.dx)["rise"]
     rest_time = h5.frames[-1][1]
 print(f"at rest: the surface at the rod {rest / h5.dx:+.4f} dx at t = {rest_time:g} s")
 # (the expected sign, the bound on the rise in dx): about half of each run's measured rise
 for path, (sign, bound) in zip(sys.argv[2:], ((-1, -0.053), (1, 0.012), (-1, -0.045))):
     with Output(path) as h5:
         p, dx = setup(h5.scene, h5.dx), h5.dx
-        rows = [measure_frame(h5.read(k, fields), p, dx) for k in range(len(h5.frames))]
+        rows = [measure_frame(h5.read(k, FRAME_FIELDS), p, dx) for k in range(len(h5.frames))]
     assert abs(h5.frames[-1][1] - rest_time) < 1e-9, "the rest run ends at another time"
     rise = (rows[-1]["rise"] - rest) / dx
     print(f"{p['model']}: rise at the rod from the surface at rest {rise:+.4f} dx at t = {h5.frames[-1][1]:g} s "
