@@ -20,10 +20,11 @@
 // p_f + rho_f g.(x_w - x_f) above the free surface, where it is negative: such a "dry" wall
 // particle fills the kernel of the surface particle beside the wall where a free surface has no
 // neighbour, and the pair term holds that particle below the free surface's level (a 2D tank at
-// rest: the column beside a wall that rises above the water settles 0.05 dx low, +0.015 dx with
+// rest: the column beside a wall that rises above the water settles 0.05 dx low, +0.014 dx with
 // this option; docs/validation.md §20, session 21). Off by default: it also removes the pull of a
 // wall on fluid in tension beside it (a die's lip), and the push of a dry wall particle on fluid
-// that climbs the wall above the level where its extrapolated pressure turns negative.
+// that climbs the wall above the level where its extrapolated pressure turns negative (measured:
+// a climb along a turning rod held back by 0.03-0.05 dx; validation.md §20, session 22).
 // free_surface_mirror = true (needs [effects.free_surface]): for a particle flagged on the free
 // surface, the zero-pressure condition by mirrored dummy particles, thesis eq. (4.1): with
 // p_i = 0 and a mirror image of every neighbour carrying -p_j,
