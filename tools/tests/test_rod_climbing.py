@@ -3,7 +3,8 @@ particles on rings about the rod, their tops raised by a chosen surface profile,
 Couette profile. The second-order profile tends to Joseph & Fosdick's h(a) - h(inf) in a wide
 container; the exact Oldroyd-B and Newtonian surfaces pass (with the CSV and PNG); a dip 30 %
 short, a surface still rising, a flow still spinning up (the Couette start-up), a void and a 2D
-scene fail; --until judges a plateau before a late drift; --rest measures from the surface at rest; several files give the table of the
+scene fail; --until judges a plateau before a late drift; --rest measures from the surface at rest; --measure profile
+fits the profile away from the rod's annulus; several files give the table of the
 rise against omega^2."""
 
 import os
@@ -203,6 +204,24 @@ def make_rod_climbing_tests(tmp):
                and "-0.1000 dx" in out, f"with --rest: exit {rc}", out + err)
         rc, out, err = run(h5, "--frames", "2", "--rest", h5)
         expect(rc == 1 and "must not turn" in err, f"a turning run as the rest: exit {rc}", out + err)
+
+    @t
+    def profile_measure_leaves_the_rods_annulus_out():
+        # The exact surface with the rod's annulus 0.1 dx low: the rise at the rod fails, the
+        # profile measure (second annulus to R/2) finds the amplitude 1; a dip 30 % short is 0.7
+        # by both; a surface still rising is not steady in the amplitude either.
+        dipped = write_case(os.path.join(tmp, "dipped_n.h5"), model="newtonian", first_annulus_offset=-0.1 * DX)
+        rc, out, err = run(dipped, "--frames", "2")
+        expect(rc == 1 and "measured/theory = 1.000" not in out, f"the rod's annulus: exit {rc}", out + err)
+        rc, out, err = run(dipped, "--frames", "2", "--measure", "profile")
+        expect(rc == 0 and "over annuli 2..6" in out and "amplitude 1.000" in out, f"the profile: exit {rc}", out + err)
+        short = write_case(os.path.join(tmp, "n_short_p.h5"), model="newtonian", scale=0.7)
+        rc, out, err = run(short, "--frames", "2", "--measure", "profile")
+        expect(rc == 1 and "amplitude 0.700" in out and "amplitude error -30 %" in out
+               and "profile amplitude 0.700" in err, f"a 30 % short dip: exit {rc}", out + err)
+        grow = write_case(os.path.join(tmp, "grow_p.h5"), model="newtonian", growing=True)
+        rc, out, err = run(grow, "--frames", "2", "--measure", "profile", "--tolerance", "1")
+        expect(rc == 1 and "the profile amplitude changed by" in err, f"a rising surface: exit {rc}", out + err)
 
     @t
     def a_flow_still_spinning_up_is_not_steady():
