@@ -354,9 +354,17 @@ def make_die_swell_convergence_tests(tmp):
         expect(s["effects"]["surface_pressure"] == {"value": "normal_stress"}
                and s["effects"]["free_surface"] == {"threshold": 0.97} and "solver" not in s
                and "equation_of_state" in s["effects"], f"wcsph normal stress: {s['effects']}")
+        # the dry walls: the pressure force's key and nothing else
+        s = dsc.scene(10, 0.5, {"dry_walls": "omit"})
+        expect(s["effects"]["pressure_gradient"] == {"dry_walls": "omit"}
+               and {k: x for k, x in s["effects"].items() if k != "pressure_gradient"}
+               == {k: x for k, x in ref["effects"].items() if k != "pressure_gradient"}
+               and {k: x for k, x in s.items() if k != "effects"} == {k: x for k, x in ref.items() if k != "effects"}
+               and dsc.variant_suffix({"dry_walls": "omit"}) == "_drywalls"
+               and dsc.scene(10, 0.5, {"dry_walls": "include"}) == ref, f"dry walls: {s['effects']}")
         expect(dsc.variant_suffix({"wall_floor": None, "xsph": None, "delta": None, "shifting": 0.0,
                                    "sound_speed": None, "integrator": None, "smoothing_ratio": None,
-                                   "viscous_form": None}) == "", "no variant: no suffix")
+                                   "viscous_form": None, "dry_walls": "include"}) == "", "no variant: no suffix")
 
     def command():
         rc, out, err = tool("die_swell_study.py", "convergence", "--across", "10", "16", "--re", "0.5",
@@ -368,7 +376,7 @@ def make_die_swell_convergence_tests(tmp):
         expect(s["time"]["end"] == 0.2 and "xsph" not in s["effects"], f"scene written: {s}")
         for bad in (["--across", "3", "10", "16"], ["--re", "0"], ["--stations", "0.19"],
                     ["--xsph", "2"], ["--across", "10", "10", "16"], ["--smoothing-ratio", "2"],
-                    ["--viscous-form", "tensor"]):
+                    ["--viscous-form", "tensor"], ["--scheme", "isph", "--dry-walls", "omit"]):
             rc, out, err = tool("die_swell_study.py", "convergence", *bad, "--dry-run", "--out", d)
             expect(rc == 2, f"{bad}: exit {rc}", out + err)
 

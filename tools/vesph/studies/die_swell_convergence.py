@@ -6,7 +6,7 @@ Usage
     /usr/bin/python3 tools/die_swell_study.py convergence
         [--across N N N ...] [--re RE ...] [--end T] [--interval T] [--stations X ...]
         [--wall-floor P] [--xsph EPS] [--delta D] [--shifting A] [--artificial-stress EPS] [--sound-speed C]
-        [--integrator TYPE] [--smoothing-ratio R] [--viscous-form FORM] [--scheme wcsph|isph] [--surface-pressure zero|normal_stress] [--jobs J] [--out DIR] [--vesph PATH]
+        [--integrator TYPE] [--smoothing-ratio R] [--viscous-form FORM] [--scheme wcsph|isph] [--surface-pressure zero|normal_stress] [--dry-walls include|omit] [--jobs J] [--out DIR] [--vesph PATH]
         [--dry-run] [--measure-only] [--no-png] [--compare]
 
 Runs the Newtonian planar die of cases/die_swell_newtonian.toml (W = 0.01 m, exit x = 0.2 m,
@@ -51,7 +51,10 @@ step, the symmetric gradient, the density relaxation over 2.9 ms, p = 0 on the r
 0.97; no sound speed, no density diffusion; _isph), with it
 --surface-pressure normal_stress (p = n.T.n on the surface rows flagged at 0.97: ISPH's
 Dirichlet value instead of 0, [solver] surface_pressure; WCSPH's [effects.surface_pressure]
-instead of the equation of state's pressure there; _nstress). Variants combine: each given one changes the scene.
+instead of the equation of state's pressure there; _nstress), --dry-walls omit (WCSPH: the die's wall
+particles whose extrapolated pressure is negative, the lip's end face and the outer rows beside
+the extrudate, left out of the pressure force, [effects.pressure_gradient] dry_walls = "omit",
+docs/theory.md §6; they pull the extrudate back across the lip; _drywalls). Variants combine: each given one changes the scene.
 
 Outputs: OUT/convergence[SUFFIX]/re<Re>_n<N>/ (the scene, the vesph output and log, the
 measure's files), OUT/convergence[SUFFIX]/convergence[SUFFIX].csv (one row per run),
@@ -142,6 +145,8 @@ def variant_suffix(v):
         s += "_isph"
     if v.get("surface_pressure") == "normal_stress":
         s += "_nstress"
+    if v.get("dry_walls") == "omit":
+        s += "_drywalls"
     return s
 
 
@@ -220,6 +225,11 @@ def scene(n, re, variant=None, end=None, interval=None):
         e.setdefault("free_surface", {})["threshold"] = ISPH_SURFACE_THRESHOLD
         e["surface_pressure"] = {"value": "normal_stress"}
         e.setdefault("velocity_gradient", {"form": "renormalised"})
+    if v.get("dry_walls") == "omit":
+        # The wall particles whose extrapolated pressure is negative (dry: the lip's end face,
+        # the outer rows by the extrudate) out of the pressure force, so that they do not pull
+        # the extrudate back across the lip (docs/notes/die_swell.md, session 22).
+        e["pressure_gradient"]["dry_walls"] = "omit"
     if end is not None:
         s["time"]["end"] = g6(end)
     if interval is not None:
@@ -595,6 +605,9 @@ def main(argv=None):
                     help="the pressure of the flagged surface rows (threshold 0.97): ISPH's Dirichlet "
                          "value [solver] surface_pressure, WCSPH's [effects.surface_pressure] (default: "
                          "the equation of state's / ISPH p = 0; normal_stress: p = n.T.n, suffix _nstress)")
+    ap.add_argument("--dry-walls", choices=["include", "omit"], default="include",
+                    help="WCSPH: omit leaves the die's dry wall particles (negative extrapolated pressure) out "
+                         "of the pressure force ([effects.pressure_gradient] dry_walls; suffix _drywalls)")
     ap.add_argument("--jobs", type=int, default=1, metavar="J")
     ap.add_argument("--out", default="out/die_swell_study", metavar="DIR")
     ap.add_argument("--vesph", default=os.path.join(ROOT, "build", "vesph"), metavar="PATH")
@@ -625,6 +638,8 @@ def main(argv=None):
                  "quintic kernel's support 3h")
     if a.scheme == "isph" and (a.sound_speed is not None or a.delta is not None):
         ap.error("--scheme isph has no sound speed or density diffusion: drop --sound-speed, --delta")
+    if a.scheme == "isph" and a.dry_walls == "omit":
+        ap.error("--dry-walls omit is a WCSPH option (the ISPH projection solves the wall pressures with the fluid's and corrects the velocities through them)")
     if a.wall_floor is not None and not math.isfinite(a.wall_floor):
         ap.error("--wall-floor must be a finite pressure (Pa)")
     if not (a.dry_run or a.measure_only) and not shutil.which(a.vesph) and not os.path.exists(a.vesph):
@@ -632,7 +647,7 @@ def main(argv=None):
     variant = {"wall_floor": a.wall_floor, "xsph": a.xsph, "delta": a.delta,
                "shifting": a.shifting, "artificial_stress": a.artificial_stress, "sound_speed": a.sound_speed, "integrator": a.integrator,
                "smoothing_ratio": a.smoothing_ratio, "viscous_form": a.viscous_form,
-               "scheme": a.scheme, "surface_pressure": a.surface_pressure}
+               "scheme": a.scheme, "surface_pressure": a.surface_pressure, "dry_walls": a.dry_walls}
     name = "convergence" + variant_suffix(variant)
     sd = os.path.join(a.out, name)
     todo = []
