@@ -10,7 +10,10 @@ Usage
         [--dry-run] [--measure-only] [--no-png] [--compare]
 
 Runs the Newtonian planar die of cases/die_swell_newtonian.toml (W = 0.01 m, exit x = 0.2 m,
-rho = 1000 kg/m^3, feed of mean velocity U = 0.5 m/s, delta-SPH 0.1 + XSPH 0.5, leapfrog) at
+rho = 1000 kg/m^3, feed of mean velocity U = 0.5 m/s, delta-SPH 0.1 + XSPH 0.5, leapfrog; the
+study's baseline has Morris' Laplacian, every wall particle in the pressure force and no
+particle shifting, as the case had until session 25: the case's own settings are the variants
+--viscous-form stress_renormalised --shifting 1 --dry-walls omit) at
 each resolution --across (particles across the die, default 10 16 25; dx = W/N, h = 1.6 dx,
 five dummy layers and a five-column buffer) and each Reynolds number --re (default 0.5 and
 0.01; Re = rho W U / mu: the viscosity is mu = rho W U / Re, U and rho stay the case's).
@@ -35,7 +38,7 @@ phi_ext = phi1 + (phi1 - phi2)/((h2/h1)^p - 1); GCI_fine = 1.25 |phi2 - phi1| / 
 differences do not shrink (p <= 0), has no extrapolated value, and the output says so; an
 order outside [0.5, 4] is flagged as probably not yet in the asymptotic range.
 
-Variants (one thing at a time against the case; each adds a suffix to the study's folder):
+Variants (one thing at a time against the baseline; each adds a suffix to the study's folder):
 --wall-floor P (pressure_floor on both die walls, Pa; _floorP), --xsph EPS (0 deletes
 [effects.xsph]; _xsphEPS), --delta D (0 deletes [effects.density_diffusion]; _deltaD),
 --shifting A (particle shifting, coefficient A, speed U, with [effects.free_surface] at 0.8;
@@ -92,6 +95,12 @@ from vesph import REPO as ROOT, tool_command, tool_environment
 from vesph.studies.die_swell import fmt, g6, run_scene, write_rows  # shared with the thesis studies
 
 CASE = os.path.join(ROOT, "cases", "die_swell_newtonian.toml")
+# Effects of the case that the study's baseline (Morris' Laplacian, walls that pull, no shifting:
+# the case of sessions 6-24) does not have; scene() removes them before applying the variants.
+BASELINE_REMOVED = ("velocity_gradient", "free_surface", "particle_shifting")
+# The variants that give the case's own settings (scene(25, 0.5, CASE_VARIANT, end=the case's
+# end) is the case).
+CASE_VARIANT = {"viscous_form": "stress_renormalised", "shifting": 1.0, "dry_walls": "omit"}
 # --scheme isph: the projection of the ISPH die (cases/die_swell_newtonian_isph_imex.toml, the
 # die's ISPH scene before the normal-stress surface): the whole pressure each step, the symmetric
 # gradient (thesis eq. 3.18) in the correction and the right-hand side, the number-density error
@@ -170,6 +179,15 @@ def scene(n, re, variant=None, end=None, interval=None):
     s["inflow"]["min"], s["inflow"]["max"] = [DIE_INLET - depth, 0.0], [DIE_INLET, W]
     s["fluid"]["viscosity"] = g6(viscosity(re))
     e = s["effects"]
+    # The study's baseline is the case as the study began with it (session 6): Morris'
+    # Laplacian, every wall particle in the pressure force, no shifting. The case now carries
+    # the variants --viscous-form stress_renormalised --shifting 1 --dry-walls omit (issue 35,
+    # session 25); they are taken out here so that every documented variant command keeps the
+    # scene it was measured with.
+    for key in BASELINE_REMOVED:
+        e.pop(key, None)
+    e["viscosity"] = {}
+    e["pressure_gradient"] = {}
     e["equation_of_state"]["sound_speed"] = g6(v["sound_speed"] if v.get("sound_speed") is not None
                                                else sound_speed(re))
     if v.get("wall_floor") is not None:
@@ -578,8 +596,8 @@ def main(argv=None):
                                  description="the Newtonian die swell under refinement")
     ap.add_argument("--across", type=int, nargs="+", default=[10, 16, 25], metavar="N")
     ap.add_argument("--re", type=float, nargs="+", default=[0.5, 0.01], metavar="RE")
-    ap.add_argument("--end", type=float, default=None, metavar="T",
-                    help="end time, s (default the case's 0.35 s)")
+    ap.add_argument("--end", type=float, default=0.35, metavar="T",
+                    help="end time, s (default 0.35 s, the case's end time until session 25)")
     ap.add_argument("--interval", type=float, default=0.005, metavar="T",
                     help="output interval, s (default 0.005)")
     ap.add_argument("--stations", type=float, nargs="+", default=[0.21, 0.23, 0.25], metavar="X")
