@@ -253,6 +253,16 @@ def scene_for(run, across, shifting=0.0, room=ROOM, wall_floor=None, surface=Fal
     inflow["ramp_time"] = g6(0.005 * scale)
     s["outflow"]["position"] = OUTFLOW
     e = s["effects"]
+    # The studies' baseline is the case as they were measured with it (before session 25):
+    # Morris' Laplacian with the velocity gradient of Fang eq. (23), every wall particle in the
+    # pressure force, no shifting. The case now carries the stress form, the lip's dry wall
+    # particles left out and shifting (issue 35); they are taken out here so that every
+    # documented study command builds the scene it was measured with.
+    e["pressure_gradient"] = {"form": "symmetric"}
+    e["viscosity"] = {}
+    e["velocity_gradient"] = {}
+    for key in ("free_surface", "particle_shifting"):
+        e.pop(key, None)
     sof = e["second_order_fluid"]
     sof.update(form=run.form, derivative=run.derivative, alpha1=run.alpha1,
                alpha2=g6(-0.1 * run.alpha1), procedure=run.procedure)
