@@ -10,6 +10,16 @@
 # finite-element value for creeping planar flow is about 1.19): a stability and regression check
 # of the case and its tools, not the validation.
 . "$(dirname "$0")/lib.sh"
+# flux_swell_within H5 TARGET RELTOL LABEL: the flux swell U/u_bar at x = 0.21 and 0.22 m over
+# 0.08-0.12 s (vesph.studies.die_swell_convergence.flux_ratio) lies within RELTOL * TARGET of TARGET.
+flux_swell_within() {
+  PYTHONPATH="$SRC/tools" $PY -c "
+import sys
+from vesph.studies.die_swell_convergence import flux_ratio
+mean, std = flux_ratio('$1', [0.21, 0.22], 0.08, 0.12)
+print(f'$4 flux swell {mean:.4f} (std {std:.4f})')
+sys.exit(0 if abs(mean - $2) <= $3 * $2 else 1)" >"$WORK/flux_$4.log" 2>&1 && pass || fail "$4 flux swell: $(tail -3 "$WORK/flux_$4.log")"
+}
 C=$SRC/cases/die_swell_newtonian.toml
 COARSE="--set particles.spacing=1e-3 --set domain.min=[0.145,-0.01] --set blocks[1].min=[0.145,-0.005] --set blocks[2].max=[0.2,0.015] --set inflow.min=[0.145,0.0]"
 # shellcheck disable=SC2086
@@ -19,12 +29,7 @@ $PY "$SRC/tools/inflow_check.py" "$H5" >"$WORK/acc.log" 2>&1 && pass || fail "ac
 grep -q '"released": [1-9]' "$WORK/ds/summary.json" && pass || fail "no particles released: $(grep -A6 flow "$WORK/ds/summary.json")"
 $PY "$SRC/tools/die_swell_measure.py" "$H5" --out-dir "$WORK/m" --no-png --stations 0.21 0.22 --from 0.08 \
   --expect-min 1.0 --expect-max 1.5 >"$WORK/m.log" 2>&1 && pass || fail "swell ratio: $(tail -8 "$WORK/m.log")"
-PYTHONPATH="$SRC/tools" $PY -c "
-import sys
-from vesph.studies.die_swell_convergence import flux_ratio
-mean, std = flux_ratio('$H5', [0.21, 0.22], 0.08, 0.12)
-print(f'WCSPH flux swell {mean:.4f} (std {std:.4f})')
-sys.exit(0 if abs(mean - 1.40) <= 0.03 * 1.40 else 1)" >"$WORK/dsw.log" 2>&1 && pass || fail "WCSPH flux swell: $(tail -3 "$WORK/dsw.log")"
+flux_swell_within "$H5" 1.40 0.03 WCSPH
 # The ISPH die with the stress-free surface (cases/die_swell_newtonian_isph.toml: the stress
 # form, p = n.T.n on the flagged rows, particle shifting) at 10 across to t = 0.12 s: the run
 # finishes and the extrudate swells as the creeping planar jet does: the flux swell U/u_bar
@@ -34,12 +39,7 @@ sys.exit(0 if abs(mean - 1.40) <= 0.03 * 1.40 else 1)" >"$WORK/dsw.log" 2>&1 && 
 # shellcheck disable=SC2086
 expect 0 "ok: finished" -- "$VESPH" run "$SRC/cases/die_swell_newtonian_isph.toml" -o "$WORK/dsi" --quiet $COARSE \
   --set time.end=0.12 --set output.interval=0.005
-PYTHONPATH="$SRC/tools" $PY -c "
-import sys
-from vesph.studies.die_swell_convergence import flux_ratio
-mean, std = flux_ratio('$WORK/dsi/die_swell_newtonian_isph.h5', [0.21, 0.22], 0.08, 0.12)
-print(f'ISPH flux swell {mean:.4f} (std {std:.4f})')
-sys.exit(0 if abs(mean - 1.19) <= 0.05 * 1.19 else 1)" >"$WORK/dsi.log" 2>&1 && pass || fail "ISPH swell: $(tail -3 "$WORK/dsi.log")"
+flux_swell_within "$WORK/dsi/die_swell_newtonian_isph.h5" 1.19 0.05 ISPH
 # The studies' scenes (tools/die_swell_study.py, every study, at 10 and 25 across) are valid
 # scenes for this vesph: `vesph check` accepts each.
 for n in 10 25; do
