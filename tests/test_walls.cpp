@@ -11,6 +11,7 @@
 
 #include <Eigen/Geometry>
 
+#include "vesph/core/pair_loop.hpp"
 #include "vesph/physics/constitutive.hpp"
 #include "vesph/sim/simulation.hpp"
 #include "vesph/sim/system.hpp"
@@ -428,4 +429,82 @@ TEST_CASE("dummy walls: slip = \"free\" is refused with the second-order fluid's
   std::vector<double> y = sim.state(), ydot(y.size());
   CHECK_THROWS_WITH_AS(sim.system().evaluate(0.0, y.data(), ydot.data()),
                        doctest::Contains("slip = \"free\" is not implemented with the second-order fluid"), InputError);
+}
+
+namespace {
+
+// The die of cases/die_swell_newtonian.toml at rest, with the fluid particle nearest the lower
+// lip moved to `to` and given the velocity (1, 0) m/s; one right-hand side evaluated. Returns the
+// largest |ghost velocity| over the lower wall's particles.
+double lowerWallGhostSpeed(const std::vector<std::string>& overrides, const Vec<2>& to) {
+  SceneHeader h;
+  Config cfg = loadScene(kDie, overrides, h);
+  Simulation<2> sim(cfg, h);
+  SphSystem<2>& sys = sim.system();
+  ParticleSet<2>& P = sys.particles;
+  const std::size_t n = P.n_moving;
+  const Vec<2> lip(0.2 - 2e-4, 2e-4);  // the die's last fluid particle on the lower wall (dx = 4e-4 m)
+  std::size_t moved = 0;
+  for (std::size_t i = 1; i < n; ++i)
+    if ((P.x(i) - lip).norm() < (P.x(moved) - lip).norm()) moved = i;
+  REQUIRE((P.x(moved) - lip).norm() < 1e-9);
+  for (std::size_t i = 0; i < n; ++i) P.v(i).setZero();
+  P.x(moved) = to;
+  P.v(moved) = Vec<2>(1.0, 0.0);
+  std::vector<double> y(sim.state().size()), ydot(y.size());
+  sys.pack(y.data());
+  sys.evaluate(0.0, y.data(), ydot.data());
+  const Field* ghost = P.fields.find("wall_velocity");
+  REQUIRE(ghost != nullptr);
+  double fastest = 0;
+  for (std::size_t w = n; w < P.size(); ++w)
+    if (P.kind[w] != static_cast<std::uint8_t>(ParticleKind::inflow) && P.position[2 * w + 1] < 0)
+      fastest = std::max(fastest, Vec<2>(ghost->data[2 * (w - n)], ghost->data[2 * (w - n) + 1]).norm());
+  return fastest;
+}
+
+}  // namespace
+
+TEST_CASE("dummy walls: wetted_face hides a block from the fluid beside its dry end face only") {
+  // A particle past the lip and below the lower wall's plane y = 0 lies beside the wall's end
+  // face x = 0.2 m: with wetted_face = [0, 1] no lower-wall particle sees it (their ghost
+  // velocities stay those of the fluid at rest, 0); without, the end face's particles mirror
+  // its velocity. Past the lip above the plane it is on the wetted side: seen either way, alike.
+  const std::vector<std::string> wet{"blocks[1].wetted_face=[0.0, 1.0]", "blocks[2].wetted_face=[0.0, -1.0]"};
+  const Vec<2> beside(0.2 + 2e-4, -4e-4), above(0.2 + 2e-4, 2e-4);
+  CHECK(lowerWallGhostSpeed({}, beside) > 0.01);
+  CHECK(lowerWallGhostSpeed(wet, beside) == 0.0);
+  const double seen = lowerWallGhostSpeed({}, above);
+  CHECK(seen > 0.01);
+  CHECK(lowerWallGhostSpeed(wet, above) == doctest::Approx(seen).epsilon(1e-12));
+
+  // The rule itself: behind the plane and outside the box along another axis. A particle
+  // behind the plane within the box's extent (one that has entered the wall) is still a pair.
+  const double record[6] = {2.0, 0.0, 0.148, -0.002, 0.2, 0.0};  // +e_y face at y = 0, box [0.148, 0.2] x [-0.002, 0]
+  const double in_die[2] = {0.19, 1e-4}, past_lip_above[2] = {0.21, 1e-4}, past_lip_below[2] = {0.201, -1e-4},
+               in_wall[2] = {0.199, -1e-4}, before_inlet_below[2] = {0.14, -1e-3};
+  CHECK_FALSE(WettedFaces<2>::besideEndFace(record, in_die));
+  CHECK_FALSE(WettedFaces<2>::besideEndFace(record, past_lip_above));
+  CHECK(WettedFaces<2>::besideEndFace(record, past_lip_below));
+  CHECK_FALSE(WettedFaces<2>::besideEndFace(record, in_wall));
+  CHECK(WettedFaces<2>::besideEndFace(record, before_inlet_below));
+  const double upper[6] = {-2.0, 0.01, 0.148, 0.01, 0.2, 0.012};  // -e_y face at y = 0.01
+  const double above_upper_lip[2] = {0.201, 0.0101}, below_upper_lip[2] = {0.201, 0.0099};
+  CHECK(WettedFaces<2>::besideEndFace(upper, above_upper_lip));
+  CHECK_FALSE(WettedFaces<2>::besideEndFace(upper, below_upper_lip));
+}
+
+TEST_CASE("dummy walls: wetted_face is refused where it has no meaning") {
+  auto build = [](const std::vector<std::string>& overrides) {
+    SceneHeader h;
+    Config cfg = loadScene(kDie, overrides, h);
+    Simulation<2> sim(cfg, h);
+  };
+  CHECK_THROWS_WITH_AS(build({"blocks[0].wetted_face=[0.0, 1.0]"}), doctest::Contains("no wetted_face on a fluid block"),
+                       InputError);
+  CHECK_THROWS_WITH_AS(build({"blocks[1].wetted_face=[0.5, 0.5]"}), doctest::Contains("coordinate unit vector"),
+                       InputError);
+  CHECK_THROWS_WITH_AS(build({"blocks[1].wetted_face=[0.0, 1.0]", "blocks[1].treatment=\"image\"",
+                              "blocks[1].normal=[0.0, 1.0]"}),
+                       doctest::Contains("no wetted_face with treatment = \"image\""), InputError);
 }

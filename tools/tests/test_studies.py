@@ -368,6 +368,13 @@ def make_die_swell_convergence_tests(tmp):
                and {k: x for k, x in s.items() if k != "effects"} == {k: x for k, x in ref.items() if k != "effects"}
                and dsc.variant_suffix({"dry_walls": "omit"}) == "_drywalls"
                and dsc.scene(10, 0.5, {"dry_walls": "include"}) == ref, f"dry walls: {s['effects']}")
+        # the wetted faces: each die wall's wetted_face, into the die, and nothing else
+        s = dsc.scene(10, 0.5, {"wetted_faces": True})
+        expect(s["blocks"][1]["wetted_face"] == [0.0, 1.0] and s["blocks"][2]["wetted_face"] == [0.0, -1.0]
+               and "wetted_face" not in s["blocks"][0]
+               and {k: x for k, x in s.items() if k != "blocks"} == {k: x for k, x in ref.items() if k != "blocks"}
+               and dsc.variant_suffix({"wetted_faces": True}) == "_wetted"
+               and dsc.scene(10, 0.5, {"wetted_faces": False}) == ref, f"wetted faces: {s['blocks']}")
         expect(dsc.variant_suffix({"wall_floor": None, "xsph": None, "delta": None, "shifting": 0.0,
                                    "sound_speed": None, "integrator": None, "smoothing_ratio": None,
                                    "viscous_form": None, "dry_walls": "include"}) == "", "no variant: no suffix")

@@ -98,6 +98,14 @@ struct WallPoint {
   // Dummy layers at rest, slip = "free": the ghost velocity is the fluid's reflected in the
   // wall's plane (above) instead of its no-slip mirror.
   bool free_slip = false;
+  // Dummy-layer box with wetted_face: the face the fluid wets, as the signed axis code
+  // +-(a + 1) of its normal into the fluid (0: none), the face's coordinate along that axis, and
+  // the block's box. A moving particle behind the face's plane and outside the box along another
+  // axis - beside one of the block's end faces, which are dry - does not interact with the
+  // block's particles (field wetted_face, read by the pair loop: vesph/core/pair_loop.hpp).
+  double wetted_face = 0;
+  double face_coordinate = 0;
+  Vec<D> box_lo = Vec<D>::Zero(), box_hi = Vec<D>::Zero();
 };
 
 template <int D>
@@ -136,6 +144,7 @@ class DummyWalls final : public Boundary<D> {
   // (resized).
   static constexpr int kPointComponents = 5 + 2 * D;
   Field* point_field_ = nullptr;  // wall_point
+  Field* wetted_field_ = nullptr;  // wetted_face (kWettedFaceComponents per fixed particle), or none
   std::vector<Index> images_;     // the image particles (depth > 0), particle indices
   std::vector<char> is_stress_;   // per interpolated field: a stress tensor (n.S.n = 0 on the wall)
   bool any_image_ = false;

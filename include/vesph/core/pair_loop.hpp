@@ -37,6 +37,36 @@ struct Neighbour {
   Index j;
 };
 
+// Dummy-wall boxes with a wetted face ([[blocks]] wetted_face; vesph/boundary/dummy_walls.hpp,
+// docs/theory.md §6.5). The field wetted_face (Field::Range::fixed) holds per fixed particle the
+// signed axis code +-(a + 1) of the face's normal into the fluid (0: none), the face's
+// coordinate along that axis, and the block's box lo[D], hi[D]. A moving particle beside the
+// block's end faces - behind the wetted face's plane and outside the box along another axis -
+// and a particle of that block are not a pair: an end face is dry, as at a die's lip, where the
+// extrudate swells past the die's wall plane beside the wall's end. Scenes without the field
+// never test.
+template <int D>
+struct WettedFaces {
+  static constexpr int kComponents = 2 + 2 * D;
+  static constexpr const char* kField = "wetted_face";
+
+  // The fixed particles' records (null when the scene has no wetted face).
+  static const double* records(const ParticleSet<D>& p) {
+    const Field* f = p.fields.find(kField);
+    return f && !f->data.empty() ? f->data.data() : nullptr;
+  }
+  // Whether the point x lies beside an end face of the block whose record is f.
+  static bool besideEndFace(const double* f, const double* x) {
+    const double code = f[0];
+    if (code == 0.0) return false;
+    const int a = static_cast<int>(code > 0 ? code : -code) - 1;
+    if ((code > 0 ? x[a] - f[1] : f[1] - x[a]) >= 0.0) return false;  // on the wetted side
+    for (int b = 0; b < D; ++b)
+      if (b != a && (x[b] < f[2 + b] || x[b] > f[2 + D + b])) return true;
+    return false;  // behind the face inside the box's extent: in the wall, where it still acts
+  }
+};
+
 template <int D>
 class PairLoop {
  public:
@@ -66,6 +96,7 @@ class PairLoop {
   std::uint64_t forEachMovingWhere(const ParticleSet<D>& p, const Kernel& kernel, const Domain<D>& domain,
                                    const NeighbourList<D>& list, Fn&& fn, Pred&& wanted = everyParticle) {
     const std::size_t n = p.ownedMoving();
+    const double* wetted = WettedFaces<D>::records(p);
     std::uint64_t pairs = 0;
     kernel.visit([&](auto shape) {
 #pragma omp parallel reduction(+ : pairs) if (n >= kParallelMinimum)
@@ -75,7 +106,10 @@ class PairLoop {
         for (std::size_t i = 0; i < n; ++i) {
           if (!wanted(static_cast<Index>(i))) continue;
           const std::size_t nm = gather<WithW>(shape, p, kernel, domain, list, i, list.start[i], list.split[i], buf);
-          const std::size_t nf = gather<WithW>(shape, p, kernel, domain, list, i, list.split[i], list.start[i + 1], buf + nm);
+          const std::size_t nf =
+              wetted ? gather<WithW, Wetted::neighbour>(shape, p, kernel, domain, list, i, list.split[i], list.start[i + 1],
+                                                        buf + nm, wetted)
+                     : gather<WithW>(shape, p, kernel, domain, list, i, list.split[i], list.start[i + 1], buf + nm);
           pairs += nm + nf;
           fn(static_cast<Index>(i), std::span<const Neighbour<D>>(buf, nm), std::span<const Neighbour<D>>(buf + nm, nf));
         }
@@ -91,13 +125,16 @@ class PairLoop {
   void forEachFixed(const ParticleSet<D>& p, const Kernel& kernel, const Domain<D>& domain,
                     const NeighbourList<D>& list, Fn&& fn) {
     const std::size_t n0 = p.n_moving, N = p.ownedEnd();
+    const double* wetted = WettedFaces<D>::records(p);
     kernel.visit([&](auto shape) {
 #pragma omp parallel if (N - n0 >= kParallelMinimum)
       {
         Neighbour<D>* buf = scratch_[static_cast<std::size_t>(omp_get_thread_num())].data();
 #pragma omp for schedule(static)
         for (std::size_t i = n0; i < N; ++i) {
-          const std::size_t nm = gather<true>(shape, p, kernel, domain, list, i, list.start[i], list.split[i], buf);
+          const std::size_t nm =
+              wetted ? gather<true, Wetted::self>(shape, p, kernel, domain, list, i, list.start[i], list.split[i], buf, wetted)
+                     : gather<true>(shape, p, kernel, domain, list, i, list.start[i], list.split[i], buf);
           fn(static_cast<Index>(i), std::span<const Neighbour<D>>(buf, nm));
         }
       }
@@ -107,10 +144,15 @@ class PairLoop {
  private:
   static constexpr bool everyParticle(Index) { return true; }
 
-  template <bool WithW, class Shape>
+  // Which wetted-face record a gathered pair is tested against (WettedFaces): none; each
+  // neighbour's (the fixed neighbours of a moving particle); the particle's own (the moving
+  // neighbours of a wall particle).
+  enum class Wetted { none, neighbour, self };
+
+  template <bool WithW, Wetted Test = Wetted::none, class Shape>
   static std::size_t gather(Shape, const ParticleSet<D>& p, const Kernel& kernel, const Domain<D>& domain,
                             const NeighbourList<D>& list, std::size_t i, std::size_t k0, std::size_t k1,
-                            Neighbour<D>* out) {
+                            Neighbour<D>* out, const double* wetted = nullptr) {
     // Everything the loop reads is copied into locals first: the compiler cannot otherwise
     // prove that the stores into `out` leave them unchanged, and reloads them every pair.
     const double* __restrict x = p.position.data();
@@ -136,6 +178,11 @@ class PairLoop {
         r2 += da * da;
       }
       if (r2 >= cut2 || r2 == 0.0) continue;
+      if constexpr (Test == Wetted::neighbour) {
+        if (WettedFaces<D>::besideEndFace(wetted + WettedFaces<D>::kComponents * (j - p.n_moving), xi)) continue;
+      } else if constexpr (Test == Wetted::self) {
+        if (WettedFaces<D>::besideEndFace(wetted + WettedFaces<D>::kComponents * (i - p.n_moving), x + D * j)) continue;
+      }
       const double r = std::sqrt(r2), q = r * inv_h;
       Neighbour<D>& nb = out[c++];
       for (int a = 0; a < D; ++a) nb.rij[a] = d[a];
@@ -162,6 +209,8 @@ class CandidatePairs {
  public:
   CandidatePairs(const ParticleSet<D>& p, const Kernel& kernel, const Domain<D>& domain, const NeighbourList<D>& list)
       : x_(p.position.data()),
+        wetted_(WettedFaces<D>::records(p)),
+        n_moving_(p.n_moving),
         nbr_(list.nbr.data()),
         domain_(&domain),
         cut2_(kernel.supportRadius() * kernel.supportRadius()),
@@ -178,6 +227,11 @@ class CandidatePairs {
       r2 += rij[a] * rij[a];
     }
     if (r2 >= cut2_ || r2 == 0.0) return false;
+    if (wetted_ && (i < n_moving_) != (j < n_moving_)) {
+      const std::size_t wall = i < n_moving_ ? j : i, moving = i < n_moving_ ? i : j;
+      if (WettedFaces<D>::besideEndFace(wetted_ + WettedFaces<D>::kComponents * (wall - n_moving_), x_ + D * moving))
+        return false;
+    }
     const double q = std::sqrt(r2) * inv_h_;
     W = w_scale_ * Shape::f(q);
     F = f_scale_ * Shape::df_over_q(q);
@@ -204,6 +258,8 @@ class CandidatePairs {
 
  private:
   const double* x_;
+  const double* wetted_;  // WettedFaces records, or null
+  std::size_t n_moving_;
   const Index* nbr_;
   const Domain<D>* domain_;
   double cut2_, inv_h_, w_scale_, f_scale_;

@@ -57,7 +57,10 @@ Dirichlet value instead of 0, [solver] surface_pressure; WCSPH's [effects.surfac
 instead of the equation of state's pressure there; _nstress), --dry-walls omit (WCSPH: the die's wall
 particles whose extrapolated pressure is negative, the lip's end face and the outer rows beside
 the extrudate, left out of the pressure force, [effects.pressure_gradient] dry_walls = "omit",
-docs/theory.md §6; they pull the extrudate back across the lip; _drywalls). Variants combine: each given one changes the scene.
+docs/theory.md §6; they pull the extrudate back across the lip; _drywalls), --wetted-faces (each
+die wall interacts only with the fluid on its wetted side, [[blocks]] wetted_face = [0, +-1]: the
+extrudate that swells past the wall's plane beside the lip's dry end face does not see the wall,
+docs/theory.md §6.5; _wetted). Variants combine: each given one changes the scene.
 
 Outputs: OUT/convergence[SUFFIX]/re<Re>_n<N>/ (the scene, the vesph output and log, the
 measure's files), OUT/convergence[SUFFIX]/convergence[SUFFIX].csv (one row per run),
@@ -156,6 +159,8 @@ def variant_suffix(v):
         s += "_nstress"
     if v.get("dry_walls") == "omit":
         s += "_drywalls"
+    if v.get("wetted_faces"):
+        s += "_wetted"
     return s
 
 
@@ -248,6 +253,12 @@ def scene(n, re, variant=None, end=None, interval=None):
         # the outer rows by the extrudate) out of the pressure force, so that they do not pull
         # the extrudate back across the lip (docs/notes/die_swell.md, session 22).
         e["pressure_gradient"]["dry_walls"] = "omit"
+    if v.get("wetted_faces"):
+        # Each die wall interacts only with the fluid on its wetted side: the extrudate that swells
+        # past the wall's plane beside the lip's dry end face does not see the wall ([[blocks]]
+        # wetted_face, docs/theory.md §6.5).
+        lower["wetted_face"] = [0.0, 1.0]
+        upper["wetted_face"] = [0.0, -1.0]
     if end is not None:
         s["time"]["end"] = g6(end)
     if interval is not None:
@@ -626,6 +637,9 @@ def main(argv=None):
     ap.add_argument("--dry-walls", choices=["include", "omit"], default="include",
                     help="WCSPH: omit leaves the die's dry wall particles (negative extrapolated pressure) out "
                          "of the pressure force ([effects.pressure_gradient] dry_walls; suffix _drywalls)")
+    ap.add_argument("--wetted-faces", action="store_true",
+                    help="each die wall interacts only with the fluid on its wetted side ([[blocks]] wetted_face: "
+                         "the lip's end face is dry; suffix _wetted)")
     ap.add_argument("--jobs", type=int, default=1, metavar="J")
     ap.add_argument("--out", default="out/die_swell_study", metavar="DIR")
     ap.add_argument("--vesph", default=os.path.join(ROOT, "build", "vesph"), metavar="PATH")
@@ -665,7 +679,8 @@ def main(argv=None):
     variant = {"wall_floor": a.wall_floor, "xsph": a.xsph, "delta": a.delta,
                "shifting": a.shifting, "artificial_stress": a.artificial_stress, "sound_speed": a.sound_speed, "integrator": a.integrator,
                "smoothing_ratio": a.smoothing_ratio, "viscous_form": a.viscous_form,
-               "scheme": a.scheme, "surface_pressure": a.surface_pressure, "dry_walls": a.dry_walls}
+               "scheme": a.scheme, "surface_pressure": a.surface_pressure, "dry_walls": a.dry_walls,
+               "wetted_faces": a.wetted_faces}
     name = "convergence" + variant_suffix(variant)
     sd = os.path.join(a.out, name)
     todo = []
