@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <limits>
 #include <numbers>
 #include <string>
@@ -21,6 +23,21 @@ using namespace vesph;
 namespace {
 
 const char* kDie = VESPH_SOURCE_DIR "/cases/die_swell_newtonian.toml";
+
+// The die case without its walls' wetted_face lines (every face of the walls seen, as before
+// session 26), written once to a temporary file: the tests that compare with and without the
+// faces, or that replace a wall's treatment, start from it.
+std::string dieWithoutWettedFaces() {
+  static const std::string path = [] {
+    std::ifstream in(kDie);
+    const std::string out = (std::filesystem::temp_directory_path() / "vesph_test_die_no_wetted_faces.toml").string();
+    std::ofstream os(out);
+    for (std::string line; std::getline(in, line);)
+      if (line.rfind("wetted_face", 0) != 0) os << line << '\n';
+    return out;
+  }();
+  return path;
+}
 
 // The die with its fluid put in tension (density 1 % below rho0) and one right-hand side
 // evaluated: the walls' extrapolated pressures. Returns {lowest, highest} pressure over the
@@ -89,7 +106,7 @@ TEST_CASE("dummy walls: pressure_floor bounds the extrapolated pressure of its o
 TEST_CASE("dummy walls: pressure_floor is refused where it has no meaning") {
   auto build = [](const std::vector<std::string>& overrides) {
     SceneHeader h;
-    Config cfg = loadScene(kDie, overrides, h);
+    Config cfg = loadScene(dieWithoutWettedFaces(), overrides, h);
     Simulation<2> sim(cfg, h);
   };
   CHECK_THROWS_WITH_AS(build({"blocks[0].pressure_floor=0.0"}), doctest::Contains("no pressure_floor on a fluid block"),
@@ -438,7 +455,7 @@ namespace {
 // largest |ghost velocity| over the lower wall's particles.
 double lowerWallGhostSpeed(const std::vector<std::string>& overrides, const Vec<2>& to) {
   SceneHeader h;
-  Config cfg = loadScene(kDie, overrides, h);
+  Config cfg = loadScene(dieWithoutWettedFaces(), overrides, h);
   Simulation<2> sim(cfg, h);
   SphSystem<2>& sys = sim.system();
   ParticleSet<2>& P = sys.particles;
@@ -497,7 +514,7 @@ TEST_CASE("dummy walls: wetted_face hides a block from the fluid beside its dry 
 TEST_CASE("dummy walls: wetted_face is refused where it has no meaning") {
   auto build = [](const std::vector<std::string>& overrides) {
     SceneHeader h;
-    Config cfg = loadScene(kDie, overrides, h);
+    Config cfg = loadScene(dieWithoutWettedFaces(), overrides, h);
     Simulation<2> sim(cfg, h);
   };
   CHECK_THROWS_WITH_AS(build({"blocks[0].wetted_face=[0.0, 1.0]"}), doctest::Contains("no wetted_face on a fluid block"),

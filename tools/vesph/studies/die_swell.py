@@ -244,6 +244,8 @@ def scene_for(run, across, shifting=0.0, room=ROOM, wall_floor=None, surface=Fal
     fluid["min"], fluid["max"] = [DIE_INLET, 0.0], [DIE_EXIT, W]
     lower["min"], lower["max"] = [DIE_INLET - depth, -depth], [DIE_EXIT, 0.0]
     upper["min"], upper["max"] = [DIE_INLET - depth, W], [DIE_EXIT, W + depth]
+    for wall in (lower, upper):          # the case's wetted faces (session 26): not in the studies
+        wall.pop("wetted_face", None)
     if wall_floor is not None and run.scheme == "wcsph":
         lower["pressure_floor"] = upper["pressure_floor"] = float(wall_floor)
     inflow = s["inflow"]

@@ -13,7 +13,7 @@ Runs the Newtonian planar die of cases/die_swell_newtonian.toml (W = 0.01 m, exi
 rho = 1000 kg/m^3, feed of mean velocity U = 0.5 m/s, delta-SPH 0.1 + XSPH 0.5, leapfrog; the
 study's baseline has Morris' Laplacian, every wall particle in the pressure force and no
 particle shifting, as the case had until session 25: the case's own settings are the variants
---viscous-form stress_renormalised --shifting 1 --dry-walls omit) at
+--viscous-form stress_renormalised --shifting 1 --wetted-faces, since session 26) at
 each resolution --across (particles across the die, default 10 16 25; dx = W/N, h = 1.6 dx,
 five dummy layers and a five-column buffer) and each Reynolds number --re (default 0.5 and
 0.01; Re = rho W U / mu: the viscosity is mu = rho W U / Re, U and rho stay the case's).
@@ -103,7 +103,7 @@ CASE = os.path.join(ROOT, "cases", "die_swell_newtonian.toml")
 BASELINE_REMOVED = ("velocity_gradient", "free_surface", "particle_shifting")
 # The variants that give the case's own settings (scene(25, 0.5, CASE_VARIANT, end=the case's
 # end) is the case).
-CASE_VARIANT = {"viscous_form": "stress_renormalised", "shifting": 1.0, "dry_walls": "omit"}
+CASE_VARIANT = {"viscous_form": "stress_renormalised", "shifting": 1.0, "wetted_faces": True}
 # --scheme isph: the projection of the ISPH die (cases/die_swell_newtonian_isph_imex.toml, the
 # die's ISPH scene before the normal-stress surface): the whole pressure each step, the symmetric
 # gradient (thesis eq. 3.18) in the correction and the right-hand side, the number-density error
@@ -185,12 +185,14 @@ def scene(n, re, variant=None, end=None, interval=None):
     s["fluid"]["viscosity"] = g6(viscosity(re))
     e = s["effects"]
     # The study's baseline is the case as the study began with it (session 6): Morris'
-    # Laplacian, every wall particle in the pressure force, no shifting. The case now carries
-    # the variants --viscous-form stress_renormalised --shifting 1 --dry-walls omit (issue 35,
-    # session 25); they are taken out here so that every documented variant command keeps the
-    # scene it was measured with.
+    # Laplacian, every wall particle in the pressure force and seen from everywhere, no
+    # shifting. The case now carries the variants --viscous-form stress_renormalised --shifting 1
+    # --wetted-faces (issue 35, sessions 25-26); they are taken out here so that every documented
+    # variant command keeps the scene it was measured with.
     for key in BASELINE_REMOVED:
         e.pop(key, None)
+    for wall in (lower, upper):          # the case's wetted faces (session 26): --wetted-faces
+        wall.pop("wetted_face", None)
     e["viscosity"] = {}
     e["pressure_gradient"] = {}
     e["equation_of_state"]["sound_speed"] = g6(v["sound_speed"] if v.get("sound_speed") is not None
