@@ -39,6 +39,13 @@ std::string dieWithoutWettedFaces() {
   return path;
 }
 
+// Builds that die with the overrides (for the refusals: throws InputError on a bad key).
+void buildDieWithoutWettedFaces(const std::vector<std::string>& overrides) {
+  SceneHeader h;
+  Config cfg = loadScene(dieWithoutWettedFaces(), overrides, h);
+  Simulation<2> sim(cfg, h);
+}
+
 // The die with its fluid put in tension (density 1 % below rho0) and one right-hand side
 // evaluated: the walls' extrapolated pressures. Returns {lowest, highest} pressure over the
 // wall particles (kinds wall and dummy) below the die (y < 0) and above it (y > W).
@@ -104,11 +111,7 @@ TEST_CASE("dummy walls: pressure_floor bounds the extrapolated pressure of its o
 }
 
 TEST_CASE("dummy walls: pressure_floor is refused where it has no meaning") {
-  auto build = [](const std::vector<std::string>& overrides) {
-    SceneHeader h;
-    Config cfg = loadScene(dieWithoutWettedFaces(), overrides, h);
-    Simulation<2> sim(cfg, h);
-  };
+  const auto build = buildDieWithoutWettedFaces;
   CHECK_THROWS_WITH_AS(build({"blocks[0].pressure_floor=0.0"}), doctest::Contains("no pressure_floor on a fluid block"),
                        InputError);
   CHECK_THROWS_WITH_AS(build({"blocks[1].pressure_floor=\"zero\""}), doctest::Contains("pressure_floor"), InputError);
@@ -512,11 +515,7 @@ TEST_CASE("dummy walls: wetted_face hides a block from the fluid beside its dry 
 }
 
 TEST_CASE("dummy walls: wetted_face is refused where it has no meaning") {
-  auto build = [](const std::vector<std::string>& overrides) {
-    SceneHeader h;
-    Config cfg = loadScene(dieWithoutWettedFaces(), overrides, h);
-    Simulation<2> sim(cfg, h);
-  };
+  const auto build = buildDieWithoutWettedFaces;
   CHECK_THROWS_WITH_AS(build({"blocks[0].wetted_face=[0.0, 1.0]"}), doctest::Contains("no wetted_face on a fluid block"),
                        InputError);
   CHECK_THROWS_WITH_AS(build({"blocks[1].wetted_face=[0.5, 0.5]"}), doctest::Contains("coordinate unit vector"),

@@ -144,7 +144,7 @@ class DummyWalls final : public Boundary<D> {
   // (resized).
   static constexpr int kPointComponents = 5 + 2 * D;
   Field* point_field_ = nullptr;  // wall_point
-  Field* wetted_field_ = nullptr;  // wetted_face (kWettedFaceComponents per fixed particle), or none
+  Field* wetted_field_ = nullptr;  // wetted_face (WettedFaces<D>::kComponents per fixed particle), or none
   std::vector<Index> images_;     // the image particles (depth > 0), particle indices
   std::vector<char> is_stress_;   // per interpolated field: a stress tensor (n.S.n = 0 on the wall)
   bool any_image_ = false;
