@@ -8,6 +8,7 @@
 #     and under adaptive ARKODE on 2 (the same steps as serially: global error norms);
 #   - the Oldroyd-B start-up channel (periodic, the elastic stress evolving in the state) under 2;
 #   - the 3D Oldroyd-B drop (walls in 3D) under 4, oversubscribed;
+#   - the WCSPH die with its walls' wetted faces (wetted_face records on the fixed particles), 2;
 #   - inflow and outflow (the channel, 2 processes; the extrapolated inlet of the open channel,
 #     2) and the 3D jet from a circular nozzle with particles leaving the domain (3 processes):
 #     particles released and removed between steps;
@@ -118,6 +119,11 @@ same channel_isph "$SRC/cases/startup_channel_oldroyd_b_isph.toml" 2 $ISPH --set
 same inflow_isph "$SRC/cases/channel_inflow_outflow_isph.toml" 2 $ISPH --set time.end=0.05 --set output.interval=0.025
 same drop_isph "$SRC/cases/drop_newtonian_isph.toml" 2 --set solver.tolerance=1e-12 --set time.end=0.0005 \
   --set output.interval=0.00025
+# The WCSPH die with its walls' wetted faces (the field wetted_face travels with the fixed
+# particles; by 0.02 s four extrudate particles lie beside the walls' end faces) at 10 across.
+same die_wetted "$SRC/cases/die_swell_newtonian.toml" 2 --set particles.spacing=1e-3 \
+  --set 'domain.min=[0.145,-0.01]' --set 'blocks[1].min=[0.145,-0.005]' --set 'blocks[2].max=[0.2,0.015]' \
+  --set 'inflow.min=[0.145,0.0]' --set time.end=0.02 --set output.interval=0.005
 # The ISPH die (inflow, the normal-stress surface pressure, particle shifting) at 10 across.
 same die_isph "$SRC/cases/die_swell_newtonian_isph.toml" 2 --set solver.tolerance=1e-12 --set particles.spacing=1e-3 \
   --set 'domain.min=[0.145,-0.01]' --set 'blocks[1].min=[0.145,-0.005]' --set 'blocks[2].max=[0.2,0.015]' \
