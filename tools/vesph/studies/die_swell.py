@@ -257,9 +257,9 @@ def scene_for(run, across, shifting=0.0, room=ROOM, wall_floor=None, surface=Fal
     e = s["effects"]
     # The studies' baseline is the case as they were measured with it (before session 25):
     # Morris' Laplacian with the velocity gradient of Fang eq. (23), every wall particle in the
-    # pressure force, no shifting. The case now carries the stress form, the lip's dry wall
-    # particles left out and shifting (issue 35); they are taken out here so that every
-    # documented study command builds the scene it was measured with.
+    # pressure force and seen from everywhere, no shifting. The case now carries the stress form,
+    # the die walls' wetted faces and shifting (issue 35, sessions 25-26); they are taken out here
+    # (the faces above) so that every documented study command builds the scene it was measured with.
     e["pressure_gradient"] = {"form": "symmetric"}
     e["viscosity"] = {}
     e["velocity_gradient"] = {}
