@@ -485,33 +485,43 @@ double lowerWallGhostSpeed(const std::vector<std::string>& overrides, const Vec<
 
 }  // namespace
 
-TEST_CASE("dummy walls: wetted_face hides a block from the fluid beside its dry end face only") {
-  // A particle past the lip and below the lower wall's plane y = 0 lies beside the wall's end
-  // face x = 0.2 m: with wetted_face = [0, 1] no lower-wall particle sees it (their ghost
-  // velocities stay those of the fluid at rest, 0); without, the end face's particles mirror
-  // its velocity. Past the lip above the plane it is on the wetted side: seen either way, alike.
+TEST_CASE("dummy walls: wetted_face hides a block from the fluid beyond its dry end faces only") {
+  // A particle past the lip lies beyond the lower wall's end face x = 0.2 m, below the wall's
+  // plane y = 0 (the extrudate swelling past it) or above it (over no part of the wetted face):
+  // with wetted_face = [0, 1] no lower-wall particle sees it either way (their ghost velocities
+  // stay those of the fluid at rest, 0); without, the last columns mirror its velocity. Inside
+  // the die, over the wetted face, it is seen alike with and without the key.
   const std::vector<std::string> wet{"blocks[1].wetted_face=[0.0, 1.0]", "blocks[2].wetted_face=[0.0, -1.0]"};
   const Vec<2> beside(0.2 + 2e-4, -4e-4), above(0.2 + 2e-4, 2e-4);
-  CHECK(lowerWallGhostSpeed({}, beside) > 0.01);
-  CHECK(lowerWallGhostSpeed(wet, beside) == 0.0);
-  const double seen = lowerWallGhostSpeed({}, above);
+  const Vec<2> inside(0.2 - 2e-4, 2e-4);  // where it is: the die's last particle over the wall
+  for (const Vec<2>& past_lip : {beside, above}) {
+    CHECK(lowerWallGhostSpeed({}, past_lip) > 0.01);
+    CHECK(lowerWallGhostSpeed(wet, past_lip) == 0.0);
+  }
+  const double seen = lowerWallGhostSpeed({}, inside);
   CHECK(seen > 0.01);
-  CHECK(lowerWallGhostSpeed(wet, above) == doctest::Approx(seen).epsilon(1e-12));
+  CHECK(lowerWallGhostSpeed(wet, inside) == doctest::Approx(seen).epsilon(1e-12));
 
-  // The rule itself: behind the plane and outside the box along another axis. A particle
-  // behind the plane within the box's extent (one that has entered the wall) is still a pair.
+  // The rule itself: outside the box along another axis than the face's, on either side of the
+  // wetted plane. A particle within the box's extent - over the face, or one that has entered
+  // the wall - is still a pair.
   const double record[6] = {2.0, 0.0, 0.148, -0.002, 0.2, 0.0};  // +e_y face at y = 0, box [0.148, 0.2] x [-0.002, 0]
   const double in_die[2] = {0.19, 1e-4}, past_lip_above[2] = {0.21, 1e-4}, past_lip_below[2] = {0.201, -1e-4},
-               in_wall[2] = {0.199, -1e-4}, before_inlet_below[2] = {0.14, -1e-3};
-  CHECK_FALSE(WettedFaces<2>::besideEndFace(record, in_die));
-  CHECK_FALSE(WettedFaces<2>::besideEndFace(record, past_lip_above));
-  CHECK(WettedFaces<2>::besideEndFace(record, past_lip_below));
-  CHECK_FALSE(WettedFaces<2>::besideEndFace(record, in_wall));
-  CHECK(WettedFaces<2>::besideEndFace(record, before_inlet_below));
+               in_wall[2] = {0.199, -1e-4}, before_inlet_below[2] = {0.14, -1e-3}, before_inlet_above[2] = {0.14, 1e-3};
+  CHECK_FALSE(WettedFaces<2>::beyondEndFace(record, in_die));
+  CHECK(WettedFaces<2>::beyondEndFace(record, past_lip_above));
+  CHECK(WettedFaces<2>::beyondEndFace(record, past_lip_below));
+  CHECK_FALSE(WettedFaces<2>::beyondEndFace(record, in_wall));
+  CHECK(WettedFaces<2>::beyondEndFace(record, before_inlet_below));
+  CHECK(WettedFaces<2>::beyondEndFace(record, before_inlet_above));
   const double upper[6] = {-2.0, 0.01, 0.148, 0.01, 0.2, 0.012};  // -e_y face at y = 0.01
-  const double above_upper_lip[2] = {0.201, 0.0101}, below_upper_lip[2] = {0.201, 0.0099};
-  CHECK(WettedFaces<2>::besideEndFace(upper, above_upper_lip));
-  CHECK_FALSE(WettedFaces<2>::besideEndFace(upper, below_upper_lip));
+  const double above_upper_lip[2] = {0.201, 0.0101}, below_upper_lip[2] = {0.201, 0.0099},
+               under_upper_wall[2] = {0.199, 0.0099};
+  CHECK(WettedFaces<2>::beyondEndFace(upper, above_upper_lip));
+  CHECK(WettedFaces<2>::beyondEndFace(upper, below_upper_lip));
+  CHECK_FALSE(WettedFaces<2>::beyondEndFace(upper, under_upper_wall));
+  const double none[6] = {0.0, 0.0, 0.148, -0.002, 0.2, 0.0};  // a block without the key
+  CHECK_FALSE(WettedFaces<2>::beyondEndFace(none, past_lip_below));
 }
 
 TEST_CASE("dummy walls: wetted_face is refused where it has no meaning") {

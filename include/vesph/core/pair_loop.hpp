@@ -40,11 +40,11 @@ struct Neighbour {
 // Dummy-wall boxes with a wetted face ([[blocks]] wetted_face; vesph/boundary/dummy_walls.hpp,
 // docs/theory.md §6.5). The field wetted_face (Field::Range::fixed) holds per fixed particle the
 // signed axis code +-(a + 1) of the face's normal into the fluid (0: none), the face's
-// coordinate along that axis, and the block's box lo[D], hi[D]. A moving particle beside the
-// block's end faces - behind the wetted face's plane and outside the box along another axis -
-// and a particle of that block are not a pair: an end face is dry, as at a die's lip, where the
-// extrudate swells past the die's wall plane beside the wall's end. Scenes without the field
-// never test.
+// coordinate along that axis, and the block's box lo[D], hi[D]. A moving particle beyond the
+// block's end faces - outside the box along another axis than the face's, on either side of the
+// wetted plane - and a particle of that block are not a pair: the dummy layers mirror the fluid
+// across the wetted face and mean nothing for fluid that is not over it, such as the extrudate
+// past a die's lip (its end face is dry). Scenes without the field never test.
 template <int D>
 struct WettedFaces {
   static constexpr int kComponents = 2 + 2 * D;
@@ -55,15 +55,16 @@ struct WettedFaces {
     const Field* f = p.fields.find(kField);
     return f && !f->data.empty() ? f->data.data() : nullptr;
   }
-  // Whether the point x lies beside an end face of the block whose record is f.
-  static bool besideEndFace(const double* f, const double* x) {
+  // Whether the point x lies beyond an end face of the block whose record is f: outside the
+  // box along an axis other than the wetted face's. A point within the box's extent along those
+  // axes is over the wetted face, or inside the wall, where the block still acts (no leak).
+  static bool beyondEndFace(const double* f, const double* x) {
     const double code = f[0];
     if (code == 0.0) return false;
     const int a = static_cast<int>(code > 0 ? code : -code) - 1;
-    if ((code > 0 ? x[a] - f[1] : f[1] - x[a]) >= 0.0) return false;  // on the wetted side
     for (int b = 0; b < D; ++b)
       if (b != a && (x[b] < f[2 + b] || x[b] > f[2 + D + b])) return true;
-    return false;  // behind the face inside the box's extent: in the wall, where it still acts
+    return false;
   }
 };
 
@@ -179,9 +180,9 @@ class PairLoop {
       }
       if (r2 >= cut2 || r2 == 0.0) continue;
       if constexpr (Test == Wetted::neighbour) {
-        if (WettedFaces<D>::besideEndFace(wetted + WettedFaces<D>::kComponents * (j - p.n_moving), xi)) continue;
+        if (WettedFaces<D>::beyondEndFace(wetted + WettedFaces<D>::kComponents * (j - p.n_moving), xi)) continue;
       } else if constexpr (Test == Wetted::self) {
-        if (WettedFaces<D>::besideEndFace(wetted + WettedFaces<D>::kComponents * (i - p.n_moving), x + D * j)) continue;
+        if (WettedFaces<D>::beyondEndFace(wetted + WettedFaces<D>::kComponents * (i - p.n_moving), x + D * j)) continue;
       }
       const double r = std::sqrt(r2), q = r * inv_h;
       Neighbour<D>& nb = out[c++];
@@ -229,7 +230,7 @@ class CandidatePairs {
     if (r2 >= cut2_ || r2 == 0.0) return false;
     if (wetted_ && (i < n_moving_) != (j < n_moving_)) {
       const std::size_t wall = i < n_moving_ ? j : i, moving = i < n_moving_ ? i : j;
-      if (WettedFaces<D>::besideEndFace(wetted_ + WettedFaces<D>::kComponents * (wall - n_moving_), x_ + D * moving))
+      if (WettedFaces<D>::beyondEndFace(wetted_ + WettedFaces<D>::kComponents * (wall - n_moving_), x_ + D * moving))
         return false;
     }
     const double q = std::sqrt(r2) * inv_h_;

@@ -58,9 +58,8 @@ instead of the equation of state's pressure there; _nstress), --dry-walls omit (
 particles whose extrapolated pressure is negative, the lip's end face and the outer rows beside
 the extrudate, left out of the pressure force, [effects.pressure_gradient] dry_walls = "omit",
 docs/theory.md §6; they pull the extrudate back across the lip; _drywalls), --wetted-faces (each
-die wall interacts only with the fluid on its wetted side, [[blocks]] wetted_face = [0, +-1]: the
-extrudate that swells past the wall's plane beside the lip's dry end face does not see the wall,
-docs/theory.md §6.5; _wetted). Variants combine: each given one changes the scene.
+die wall interacts only with the fluid over its wetted face, [[blocks]] wetted_face = [0, +-1]: the
+extrudate past the lip's dry end face does not see the wall, docs/theory.md §6.5; _wetted). Variants combine: each given one changes the scene.
 
 Outputs: OUT/convergence[SUFFIX]/re<Re>_n<N>/ (the scene, the vesph output and log, the
 measure's files), OUT/convergence[SUFFIX]/convergence[SUFFIX].csv (one row per run),
@@ -256,9 +255,8 @@ def scene(n, re, variant=None, end=None, interval=None):
         # the extrudate back across the lip (docs/notes/die_swell.md, session 22).
         e["pressure_gradient"]["dry_walls"] = "omit"
     if v.get("wetted_faces"):
-        # Each die wall interacts only with the fluid on its wetted side: the extrudate that swells
-        # past the wall's plane beside the lip's dry end face does not see the wall ([[blocks]]
-        # wetted_face, docs/theory.md §6.5).
+        # Each die wall interacts only with the fluid over its wetted face: the extrudate past
+        # the lip's dry end face does not see the wall ([[blocks]] wetted_face, docs/theory.md §6.5).
         lower["wetted_face"] = [0.0, 1.0]
         upper["wetted_face"] = [0.0, -1.0]
     if end is not None:
@@ -640,7 +638,7 @@ def main(argv=None):
                     help="WCSPH: omit leaves the die's dry wall particles (negative extrapolated pressure) out "
                          "of the pressure force ([effects.pressure_gradient] dry_walls; suffix _drywalls)")
     ap.add_argument("--wetted-faces", action="store_true",
-                    help="each die wall interacts only with the fluid on its wetted side ([[blocks]] wetted_face: "
+                    help="each die wall interacts only with the fluid over its wetted face ([[blocks]] wetted_face: "
                          "the lip's end face is dry; suffix _wetted)")
     ap.add_argument("--jobs", type=int, default=1, metavar="J")
     ap.add_argument("--out", default="out/die_swell_study", metavar="DIR")
