@@ -505,7 +505,7 @@ TEST_CASE("dummy walls: wetted_face hides a block from the fluid beyond its dry 
   // The rule itself: outside the box along another axis than the face's, on either side of the
   // wetted plane. A particle within the box's extent - over the face, or one that has entered
   // the wall - is still a pair.
-  const double record[6] = {2.0, 0.0, 0.148, -0.002, 0.2, 0.0};  // +e_y face at y = 0, box [0.148, 0.2] x [-0.002, 0]
+  const double record[5] = {2.0, 0.148, -0.002, 0.2, 0.0};  // a face normal to y, box [0.148, 0.2] x [-0.002, 0]
   const double in_die[2] = {0.19, 1e-4}, past_lip_above[2] = {0.21, 1e-4}, past_lip_below[2] = {0.201, -1e-4},
                in_wall[2] = {0.199, -1e-4}, before_inlet_below[2] = {0.14, -1e-3}, before_inlet_above[2] = {0.14, 1e-3};
   CHECK_FALSE(WettedFaces<2>::beyondEndFace(record, in_die));
@@ -514,13 +514,13 @@ TEST_CASE("dummy walls: wetted_face hides a block from the fluid beyond its dry 
   CHECK_FALSE(WettedFaces<2>::beyondEndFace(record, in_wall));
   CHECK(WettedFaces<2>::beyondEndFace(record, before_inlet_below));
   CHECK(WettedFaces<2>::beyondEndFace(record, before_inlet_above));
-  const double upper[6] = {-2.0, 0.01, 0.148, 0.01, 0.2, 0.012};  // -e_y face at y = 0.01
+  const double upper[5] = {2.0, 0.148, 0.01, 0.2, 0.012};  // the upper wall, its face at y = 0.01
   const double above_upper_lip[2] = {0.201, 0.0101}, below_upper_lip[2] = {0.201, 0.0099},
                under_upper_wall[2] = {0.199, 0.0099};
   CHECK(WettedFaces<2>::beyondEndFace(upper, above_upper_lip));
   CHECK(WettedFaces<2>::beyondEndFace(upper, below_upper_lip));
   CHECK_FALSE(WettedFaces<2>::beyondEndFace(upper, under_upper_wall));
-  const double none[6] = {0.0, 0.0, 0.148, -0.002, 0.2, 0.0};  // a block without the key
+  const double none[5] = {0.0, 0.148, -0.002, 0.2, 0.0};  // a block without the key
   CHECK_FALSE(WettedFaces<2>::beyondEndFace(none, past_lip_below));
 }
 

@@ -45,7 +45,7 @@ void DummyWalls<D>::setup(Setup<D>& s) {
   }
   // Wetted faces: the pair loop (WettedFaces, vesph/core/pair_loop.hpp) reads the record of
   // each fixed particle from this field, which travels with it in a distributed run.
-  if (std::any_of(points_.begin(), points_.end(), [](const WallPoint<D>& w) { return w.wetted_face != 0; })) {
+  if (std::any_of(points_.begin(), points_.end(), [](const WallPoint<D>& w) { return w.wetted_axis >= 0; })) {
     wetted_field_ = &s.particles.fields.require(WettedFaces<D>::kField, WettedFaces<D>::kComponents, Field::Range::fixed);
     wetted_field_->refreshed_in_halo = false;  // set once; the ghosts get it with the halo
   }
@@ -57,11 +57,10 @@ void DummyWalls<D>::fieldsAllocated(ParticleSet<D>&) {
     for (std::size_t k = 0; k < points_.size(); ++k) {
       const WallPoint<D>& w = points_[k];
       double* f = wetted_field_->at(k);
-      f[0] = w.wetted_face;
-      f[1] = w.face_coordinate;
+      f[0] = static_cast<double>(w.wetted_axis + 1);
       for (int a = 0; a < D; ++a) {
-        f[2 + a] = w.box_lo[a];
-        f[2 + D + a] = w.box_hi[a];
+        f[1 + a] = w.box_lo[a];
+        f[1 + D + a] = w.box_hi[a];
       }
     }
   if (!point_field_) return;

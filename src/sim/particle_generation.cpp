@@ -118,8 +118,7 @@ struct Block {
   bool polar = false;      // dummy wall of a round shape: averaged in its polar frame
   bool linear_stress = false;  // dummy wall: stresses continued linearly from the fluid
   bool free_slip = false;  // dummy wall at rest: slip = "free" (no shear stress)
-  int wet_axis = -1;       // dummy box with wetted_face: the face's normal +-e_axis (-1: none)
-  double wet_sign = 1;
+  int wet_axis = -1;       // dummy box with wetted_face: the axis of the face's normal (-1: none)
   bool hydrostatic = false;              // fluid: hydrostatic initial density
   std::optional<double> surface_height{};  // its free surface, m along -g (absent: the block's top)
 
@@ -261,13 +260,14 @@ class BlockReader {
           b.fail("slip", std::string("\"no\" on a moving wall (") + key + "; free slip is for walls at rest)");
     }
     if (b.has("wetted_face")) {
-      // The one face of a dummy-layer box that the fluid wets; fluid beside its other (end)
-      // faces does not see the block (vesph/core/pair_loop.hpp WettedFaces, docs/theory.md §6.5).
+      // The one face of a dummy-layer box that the fluid wets; fluid beyond its end faces
+      // (outside the box along another axis) does not see the block; the sign names the face
+      // for the reader and is checked, the rule needs only the axis (vesph/core/pair_loop.hpp WettedFaces, docs/theory.md §6.5).
       if (block.image) b.fail("wetted_face", "no wetted_face with treatment = \"image\" (its normal says which face is wet)");
       if (shape != "box") b.fail("wetted_face", "no wetted_face on a " + shape + " (a box's face)");
       for (const char* key : kWallMotionKeys)
         if (b.has(key)) b.fail("wetted_face", std::string("no wetted_face on a moving wall (") + key + ")");
-      std::tie(block.wet_axis, block.wet_sign) = b.coordinateAxis<D>(
+      std::tie(block.wet_axis, std::ignore) = b.coordinateAxis<D>(
           "wetted_face", "a coordinate unit vector from the wall into the fluid across its wetted face, e.g. [0.0, 1.0] "
                          "for a die's lower wall");
     }
@@ -576,8 +576,7 @@ class LatticePlacer {
       w.linear_stress = b.linear_stress;
       w.free_slip = b.free_slip;
       if (b.wet_axis >= 0) {
-        w.wetted_face = b.wet_sign * static_cast<double>(b.wet_axis + 1);
-        w.face_coordinate = b.wet_sign > 0 ? b.solid.hi[b.wet_axis] : b.solid.lo[b.wet_axis];
+        w.wetted_axis = b.wet_axis;
         w.box_lo = b.solid.lo;
         w.box_hi = b.solid.hi;
       }
@@ -843,7 +842,7 @@ std::vector<WallPoint<D>> generateParticles(ConfigTable& root, const LatticeGeom
   // record (DummyWalls treats an empty one as all no-slip dummy layers without a floor).
   if (std::none_of(wall_points.begin(), wall_points.end(), [](const WallPoint<D>& w) {
         return w.image || w.polar || w.linear_stress || w.free_slip || std::isfinite(w.pressure_floor) ||
-               w.wetted_face != 0;
+               w.wetted_axis >= 0;
       }))
     std::vector<WallPoint<D>>().swap(wall_points);
   return wall_points;

@@ -98,13 +98,11 @@ struct WallPoint {
   // Dummy layers at rest, slip = "free": the ghost velocity is the fluid's reflected in the
   // wall's plane (above) instead of its no-slip mirror.
   bool free_slip = false;
-  // Dummy-layer box with wetted_face: the face the fluid wets, as the signed axis code
-  // +-(a + 1) of its normal into the fluid (0: none), the face's coordinate along that axis, and
-  // the block's box. A moving particle behind the face's plane and outside the box along another
-  // axis - beside one of the block's end faces, which are dry - does not interact with the
-  // block's particles (field wetted_face, read by the pair loop: vesph/core/pair_loop.hpp).
-  double wetted_face = 0;
-  double face_coordinate = 0;
+  // Dummy-layer box with wetted_face: the axis of the wetted face's normal (-1: none) and the
+  // block's box. A moving particle outside the box along another axis - beyond one of the
+  // block's end faces, which are dry, on either side of the wetted plane - does not interact
+  // with the block's particles (field wetted_face, read by the pair loop: vesph/core/pair_loop.hpp).
+  int wetted_axis = -1;
   Vec<D> box_lo = Vec<D>::Zero(), box_hi = Vec<D>::Zero();
 };
 

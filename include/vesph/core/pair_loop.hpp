@@ -38,16 +38,16 @@ struct Neighbour {
 };
 
 // Dummy-wall boxes with a wetted face ([[blocks]] wetted_face; vesph/boundary/dummy_walls.hpp,
-// docs/theory.md §6.5). The field wetted_face (Field::Range::fixed) holds per fixed particle the
-// signed axis code +-(a + 1) of the face's normal into the fluid (0: none), the face's
-// coordinate along that axis, and the block's box lo[D], hi[D]. A moving particle beyond the
+// docs/theory.md §6.5). The field wetted_face (Field::Range::fixed) holds per fixed particle
+// a + 1 for the axis a of the wetted face's normal (0: none) and the block's box lo[D], hi[D];
+// which of the two faces along that axis is wetted does not enter the rule. A moving particle beyond the
 // block's end faces - outside the box along another axis than the face's, on either side of the
 // wetted plane - and a particle of that block are not a pair: the dummy layers mirror the fluid
 // across the wetted face and mean nothing for fluid that is not over it, such as the extrudate
 // past a die's lip (its end face is dry). Scenes without the field never test.
 template <int D>
 struct WettedFaces {
-  static constexpr int kComponents = 2 + 2 * D;
+  static constexpr int kComponents = 1 + 2 * D;
   static constexpr const char* kField = "wetted_face";
 
   // The fixed particles' records (null when the scene has no wetted face).
@@ -59,11 +59,10 @@ struct WettedFaces {
   // box along an axis other than the wetted face's. A point within the box's extent along those
   // axes is over the wetted face, or inside the wall, where the block still acts (no leak).
   static bool beyondEndFace(const double* f, const double* x) {
-    const double code = f[0];
-    if (code == 0.0) return false;
-    const int a = static_cast<int>(code > 0 ? code : -code) - 1;
+    const int a = static_cast<int>(f[0]) - 1;
+    if (a < 0) return false;
     for (int b = 0; b < D; ++b)
-      if (b != a && (x[b] < f[2 + b] || x[b] > f[2 + D + b])) return true;
+      if (b != a && (x[b] < f[1 + b] || x[b] > f[1 + D + b])) return true;
     return false;
   }
 };
